@@ -39,6 +39,6 @@ pub use mesh::PolyMesh;
 pub use plane::Plane;
 pub use polyhedron::{ConvexPolyhedron, Edge};
 pub use pose::Pose;
-// pub use se3::{Mat6, Twist, Wrench};
-// pub use spatial::SpatialInertia;
+pub use se3::{Mat6, Twist, Wrench};
+pub use spatial::SpatialInertia;
 pub use sphere::Sphere;
