@@ -10,7 +10,7 @@
 //!   polygon mesh (thesis chapter 6), printed as JSON.
 #![forbid(unsafe_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -48,7 +48,7 @@ enum Command {
     },
 }
 
-fn massprops(mesh: &PathBuf, density: Option<f64>, mass: Option<f64>) -> Result<String, String> {
+fn massprops(mesh: &Path, density: Option<f64>, mass: Option<f64>) -> Result<String, String> {
     let mesh = impulse_geom::obj::read(mesh).map_err(|e| e.to_string())?;
     let props = match mass {
         Some(m) => MassProperties::from_mesh_with_mass(&mesh, m),
