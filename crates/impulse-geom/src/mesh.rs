@@ -256,7 +256,7 @@ impl PolyMesh {
     }
 
     /// Pairs every half-edge with its opposite; returns the number of undirected edges.
-    fn check_edges(&self) -> Result<usize, GeomError> {
+    pub(crate) fn check_edges(&self) -> Result<usize, GeomError> {
         // (min, max, forward?, face) for every half-edge, sorted so both uses of an edge meet.
         let mut half: Vec<(u32, u32, bool, u32)> = Vec::with_capacity(self.face_indices.len());
         for (f, face) in self.faces().enumerate() {
