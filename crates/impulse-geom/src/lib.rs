@@ -9,9 +9,9 @@
 //!   from a convex hull ([`hull`]), from explicit faces, or as primitives;
 //! - bounding volumes ([`Aabb`]) and reading/writing Wavefront OBJ meshes ([`obj`]).
 //!
-//! **Must not know** about mass, bodies, time, collisions, worlds or threads. It depends on glam
-//! and thiserror only. Mass properties live in `impulse-massprops`, collision queries in
-//! `impulse-collide`.
+//! **Must not know** about mass, bodies, time, collisions, worlds or threads. It depends on glam,
+//! thiserror and robust (exact orientation predicates for the hull) only. Mass properties live in
+//! `impulse-massprops`, collision queries in `impulse-collide`.
 //!
 //! Conventions: SI units are not assumed (any consistent length unit works); every length
 //! tolerance is relative to the size of the object it applies to (see [`tol`]). Twists and

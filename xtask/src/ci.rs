@@ -1,0 +1,134 @@
+//! `cargo xtask ci`: every check a CI job runs, in order, stopping at the first failure.
+//!
+//! The steps are: `cargo fmt --all -- --check`; `cargo clippy --workspace --all-targets -- -D
+//! warnings`; `cargo test --workspace` (explicitly the whole workspace: the default members
+//! leave out xtask, whose own tests must run too); the layering check and `validate`, both
+//! in-process. Each step prints a heading, then its wall time; a summary line ends the run.
+
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use crate::{Result, cargo, layering, validate, workspace_root};
+
+/// One step of the sequence.
+enum Step {
+    /// `cargo <args>`, run in the workspace root with inherited output.
+    Cargo(&'static [&'static str]),
+    /// A check of this crate, run in this process: (name, check).
+    InProcess(&'static str, fn() -> Result<()>),
+}
+
+impl Step {
+    /// The heading printed before the step runs.
+    fn title(&self) -> String {
+        match self {
+            Step::Cargo(args) => format!("cargo {}", args.join(" ")),
+            Step::InProcess(name, _) => (*name).to_owned(),
+        }
+    }
+
+    /// Runs the step.
+    fn run(&self) -> Result<()> {
+        match self {
+            Step::Cargo(args) => cargo_step(args),
+            Step::InProcess(_, run) => run(),
+        }
+    }
+}
+
+/// The steps, in the order they run.
+const STEPS: &[Step] = &[
+    Step::Cargo(&["fmt", "--all", "--", "--check"]),
+    Step::Cargo(&[
+        "clippy",
+        "--workspace",
+        "--all-targets",
+        "--",
+        "-D",
+        "warnings",
+    ]),
+    Step::Cargo(&["test", "--workspace"]),
+    Step::InProcess("layering", layering::run),
+    Step::InProcess("validate", || validate::run(&validate::Options::default())),
+];
+
+/// Runs every step; `Err` names the step that failed and why.
+pub fn run() -> Result<()> {
+    let start = Instant::now();
+    let mut timings = Vec::new();
+    for step in STEPS {
+        let title = step.title();
+        println!("\n==> {title}");
+        let step_start = Instant::now();
+        let result = step.run();
+        let elapsed = step_start.elapsed();
+        match result {
+            Ok(()) => {
+                println!("==> ok: {title} ({})", seconds(elapsed));
+                timings.push((title, elapsed));
+            }
+            Err(message) => {
+                println!("==> FAILED: {title} ({})", seconds(elapsed));
+                return Err(format!(
+                    "ci failed at `{title}` after {} in total: {message}",
+                    seconds(start.elapsed())
+                ));
+            }
+        }
+    }
+    println!("\nci summary:");
+    for (title, elapsed) in &timings {
+        println!("  {:>9}  {title}", seconds(*elapsed));
+    }
+    println!(
+        "ci: all {} steps passed in {}",
+        STEPS.len(),
+        seconds(start.elapsed())
+    );
+    Ok(())
+}
+
+/// Runs `cargo <args>` in the workspace root with inherited output.
+fn cargo_step(args: &[&str]) -> Result<()> {
+    let shown = format!("cargo {}", args.join(" "));
+    let status = Command::new(cargo())
+        .args(args)
+        .current_dir(workspace_root())
+        .status()
+        .map_err(|e| format!("could not start `{shown}`: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("`{shown}` failed ({status})"))
+    }
+}
+
+/// A duration as seconds with one decimal, e.g. `12.3 s`.
+fn seconds(duration: Duration) -> String {
+    format!("{:.1} s", duration.as_secs_f64())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_run_in_the_documented_order() {
+        let titles: Vec<String> = STEPS.iter().map(Step::title).collect();
+        assert_eq!(
+            titles,
+            [
+                "cargo fmt --all -- --check",
+                "cargo clippy --workspace --all-targets -- -D warnings",
+                "cargo test --workspace",
+                "layering",
+                "validate",
+            ]
+        );
+    }
+
+    #[test]
+    fn durations_print_in_seconds() {
+        assert_eq!(seconds(Duration::from_millis(12_345)), "12.3 s");
+    }
+}

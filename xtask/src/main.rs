@@ -1,0 +1,197 @@
+//! `xtask`: the project automation of `impulse`, run as `cargo xtask <command>`.
+//!
+//! Layer 5 of `docs/architecture.md`, beside the `impulse` program; nothing depends on it.
+//!
+//! **Owns**: the one entry point for CI (`ci` runs locally exactly what a CI job runs, so no logic
+//! lives in workflow YAML); the validation harness (`validate`: the registry of cases in
+//! [`cases`], their references and tolerances, how results are judged, printed and snapshotted in
+//! `fixtures/snapshots/`); the layering check (`layering`: crate dependencies against the layer
+//! table of `docs/architecture.md`).
+//!
+//! **Must not know**: how any quantity is computed. Cases call the public API of the library
+//! crates and compare with independent references; xtask holds no geometry or physics of its
+//! own, and no library crate may learn about validation cases or snapshots.
+//!
+//! Modules: [`ci`] (the step sequence), [`layering`], [`validate`] (harness, checks, snapshots),
+//! [`cases`] (the registry). Dependencies are kept minimal: insta and serde_json only; the
+//! command line is parsed by hand.
+
+mod cases;
+mod ci;
+mod layering;
+mod validate;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Errors are one human-readable message with its context; xtask only ever prints them.
+pub type Result<T> = std::result::Result<T, String>;
+
+/// Usage text, printed by `help` and on a command-line error.
+const USAGE: &str = "\
+usage: cargo xtask <command>
+
+commands:
+  ci                                  cargo fmt --check, clippy -D warnings, test --workspace,
+                                      layering, validate; stops at the first failure
+  validate [--update] [--case NAME]   run the validation cases (all, or only NAME), check each
+                                      metric against its reference, compare with the snapshots
+                                      in fixtures/snapshots/; --update writes the snapshots
+  layering                            check crate dependencies against the layer table of
+                                      docs/architecture.md
+  help                                print this message
+";
+
+/// A parsed command line.
+#[derive(Debug, PartialEq)]
+enum Command {
+    Ci,
+    Validate(validate::Options),
+    Layering,
+    Help,
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let command = match parse_args(&args) {
+        Ok(command) => command,
+        Err(message) => {
+            eprintln!("error: {message}\n\n{USAGE}");
+            return ExitCode::from(2);
+        }
+    };
+    let result = match command {
+        Command::Ci => ci::run(),
+        Command::Validate(options) => validate::run(&options),
+        Command::Layering => layering::run(),
+        Command::Help => {
+            print!("{USAGE}");
+            Ok(())
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Parses the arguments after `cargo xtask`; `Err` is a usage error (exit code 2).
+fn parse_args(args: &[String]) -> Result<Command> {
+    let Some((command, rest)) = args.split_first() else {
+        return Err("no command given".to_owned());
+    };
+    let no_arguments = |command: Command| match rest.first() {
+        None => Ok(command),
+        Some(arg) => Err(format!("unexpected argument `{arg}`")),
+    };
+    match command.as_str() {
+        "ci" => no_arguments(Command::Ci),
+        "layering" => no_arguments(Command::Layering),
+        "help" | "-h" | "--help" => no_arguments(Command::Help),
+        "validate" => parse_validate(rest).map(Command::Validate),
+        other => Err(format!("unknown command `{other}`")),
+    }
+}
+
+/// Parses `validate [--update] [--case NAME]` (also `--case=NAME`).
+fn parse_validate(args: &[String]) -> Result<validate::Options> {
+    let mut options = validate::Options::default();
+    let mut args = args.iter();
+    while let Some(arg) = args.next() {
+        let case = match arg.as_str() {
+            "--update" => {
+                options.update = true;
+                continue;
+            }
+            "--case" => args.next().ok_or("`--case` needs a case name")?.clone(),
+            _ => match arg.strip_prefix("--case=") {
+                Some(name) => name.to_owned(),
+                None => return Err(format!("unexpected argument `{arg}` to `validate`")),
+            },
+        };
+        if options.case.replace(case).is_some() {
+            return Err("`--case` given more than once".to_owned());
+        }
+    }
+    Ok(options)
+}
+
+/// The workspace root: the parent of this crate's manifest directory.
+pub fn workspace_root() -> PathBuf {
+    let manifest_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    manifest_dir
+        .parent()
+        .map_or(manifest_dir.clone(), PathBuf::from)
+}
+
+/// The cargo to run: `$CARGO` (set by cargo for `cargo run`, hence for `cargo xtask`), else
+/// `cargo` from `PATH`.
+pub fn cargo() -> std::ffi::OsString {
+    std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<Command> {
+        parse_args(&args.iter().map(|a| a.to_string()).collect::<Vec<_>>())
+    }
+
+    #[test]
+    fn commands_parse() {
+        assert_eq!(parse(&["ci"]), Ok(Command::Ci));
+        assert_eq!(parse(&["layering"]), Ok(Command::Layering));
+        assert_eq!(parse(&["help"]), Ok(Command::Help));
+        assert_eq!(
+            parse(&["validate"]),
+            Ok(Command::Validate(validate::Options::default()))
+        );
+        let expected = validate::Options {
+            update: true,
+            case: Some("V1".to_owned()),
+        };
+        assert_eq!(
+            parse(&["validate", "--update", "--case", "V1"]),
+            Ok(Command::Validate(expected))
+        );
+        let expected = validate::Options {
+            update: false,
+            case: Some("V2".to_owned()),
+        };
+        assert_eq!(
+            parse(&["validate", "--case=V2"]),
+            Ok(Command::Validate(expected))
+        );
+    }
+
+    #[test]
+    fn bad_command_lines_are_usage_errors() {
+        assert!(parse(&[]).is_err());
+        assert!(
+            parse(&["frobnicate"])
+                .unwrap_err()
+                .contains("unknown command `frobnicate`")
+        );
+        assert!(parse(&["ci", "--fast"]).unwrap_err().contains("`--fast`"));
+        assert!(
+            parse(&["validate", "--case"])
+                .unwrap_err()
+                .contains("needs a case name")
+        );
+        assert!(parse(&["validate", "--case", "a", "--case", "b"]).is_err());
+        assert!(
+            parse(&["validate", "--updat"])
+                .unwrap_err()
+                .contains("`--updat`")
+        );
+    }
+
+    #[test]
+    fn workspace_root_holds_the_architecture_doc() {
+        assert!(workspace_root().join("docs/architecture.md").is_file());
+    }
+}
