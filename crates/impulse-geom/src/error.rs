@@ -67,6 +67,15 @@ pub enum GeomError {
         /// The smallest accepted area for its size.
         limit: f64,
     },
+    /// A face lost its area while coplanar faces were merged or vertices on straight edges
+    /// removed: the input has features at the scale of the tolerance.
+    #[error(
+        "face {face} collapsed while merging coplanar faces: the input has features only a few tolerances across"
+    )]
+    CollapsedFace {
+        /// Face index (after merging).
+        face: usize,
+    },
     /// A face's vertices do not lie in one plane.
     #[error(
         "face {face} is not planar: a vertex lies {deviation:e} from its plane (tolerance {tolerance:e}); triangulate it"

@@ -384,7 +384,12 @@ fn build(
     for f in 0..mesh.face_count() {
         ctx.check_face(f)?;
     }
-    let topo = Topology::new(&mesh)?;
+    let topo = Topology::new(&mesh).map_err(|e| match e {
+        GeomError::NonManifoldVertex { vertex } => GeomError::NonManifoldVertex {
+            vertex: kept[vertex as usize],
+        },
+        other => other,
+    })?;
     for e in &topo.edges {
         ctx.check_edge(e)?;
     }
@@ -437,11 +442,7 @@ fn directed_edges(faces: &[Vec<u32>]) -> HashMap<(u32, u32), usize> {
 
 fn face_plane(mesh: &PolyMesh, f: usize) -> Result<Plane, GeomError> {
     let pts = mesh.face(f).iter().map(|&i| mesh.vertices()[i as usize]);
-    plane_of(pts).ok_or(GeomError::DegenerateFace {
-        face: f,
-        area: 0.0,
-        limit: 0.0,
-    })
+    plane_of(pts).ok_or(GeomError::CollapsedFace { face: f })
 }
 
 /// A face after merging: its loop, and for a merged polygon the normal of the plane all its
@@ -609,7 +610,7 @@ fn merge_coplanar(
             outline(&faces, members, &edge_face)
                 .zip(reference)
                 .filter(|(loop_, plane)| {
-                    convex_loop(loop_.iter().map(|&i| pos(i)), plane.normal, tolerance)
+                    convex_loop(loop_.iter().map(|&i| pos(i)), plane.normal, tolerance).is_ok()
                 });
         match merged {
             Some((loop_, plane)) => out.push(MergedFace {
@@ -631,9 +632,14 @@ fn merge_coplanar(
     Ok(out)
 }
 
-/// True when the loop is a convex polygon seen along `normal`: every corner turns left or lies
-/// within `tolerance` of the chord of its neighbours, and the loop turns once in all.
-fn convex_loop(points: impl Iterator<Item = DVec3>, normal: DVec3, tolerance: f64) -> bool {
+/// Checks that a loop is a convex polygon seen along `normal`: every corner turns left or lies
+/// within `tolerance` of the chord of its neighbours, and the loop turns once in all. On failure
+/// returns the position of the offending corner (0 when the loop as a whole is folded).
+fn convex_loop(
+    points: impl Iterator<Item = DVec3>,
+    normal: DVec3,
+    tolerance: f64,
+) -> Result<(), usize> {
     let pts: Vec<DVec3> = points.collect();
     let n = pts.len();
     let mut turning = 0.0;
@@ -644,12 +650,16 @@ fn convex_loop(points: impl Iterator<Item = DVec3>, normal: DVec3, tolerance: f6
         let chord = (c - a).length();
         // Signed distance of the corner from its neighbours' chord, outward positive.
         if !(chord > 0.0 && sin / chord >= -tolerance) {
-            return false;
+            return Err(k);
         }
         turning += sin.atan2(u.dot(w));
     }
     // A simple convex loop turns by exactly 2π; a folded one by another multiple of it.
-    (turning - TAU).abs() <= std::f64::consts::PI
+    if (turning - TAU).abs() <= std::f64::consts::PI {
+        Ok(())
+    } else {
+        Err(0)
+    }
 }
 
 /// The outline of a group of faces: its boundary half-edges chained into one loop, or `None`
@@ -706,11 +716,7 @@ fn remove_two_face_vertices(
     for (f, face) in faces.iter_mut().enumerate() {
         face.loop_.retain(|&i| owners[i as usize].len() != 2);
         if face.loop_.len() < 3 {
-            return Err(GeomError::DegenerateFace {
-                face: f,
-                area: 0.0,
-                limit: 0.0,
-            });
+            return Err(GeomError::CollapsedFace { face: f });
         }
     }
     Ok((faces, removed))
@@ -745,14 +751,14 @@ impl Checker<'_> {
                 tolerance: self.tolerance,
             });
         }
-        if !convex_loop(
+        if let Err(k) = convex_loop(
             face.iter().map(|&v| self.pos(v)),
             plane.normal,
             self.tolerance,
         ) {
             return Err(GeomError::NonConvexFace {
                 face: f,
-                vertex: self.input_ids[face[0] as usize],
+                vertex: self.input_ids[face[k] as usize],
             });
         }
         Ok(())
@@ -1122,6 +1128,38 @@ pub(crate) mod tests {
                     f: 12
                 }
             ),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn errors_name_vertices_in_input_numbering() {
+        // Two corner tetrahedra touching only at the origin (input vertex 1), plus vertex 0 at
+        // the middle of an edge: it is dropped, which shifts every later vertex's index inside
+        // the polyhedron, yet the error must name the origin as the user numbered it.
+        let v = vec![
+            DVec3::new(0.5, 0.5, 0.0), // 0: middle of edge 2-3
+            DVec3::ZERO,               // 1: the shared corner
+            DVec3::X,
+            DVec3::Y,
+            DVec3::Z,
+            -DVec3::X,
+            -DVec3::Y,
+            -DVec3::Z,
+        ];
+        let faces: Vec<Vec<u32>> = vec![
+            vec![1, 3, 0, 2],
+            vec![1, 2, 4],
+            vec![1, 4, 3],
+            vec![2, 0, 3, 4],
+            vec![1, 5, 6],
+            vec![1, 7, 5],
+            vec![1, 6, 7],
+            vec![5, 7, 6],
+        ];
+        let err = ConvexPolyhedron::from_faces(v, faces).unwrap_err();
+        assert!(
+            matches!(err, GeomError::NonManifoldVertex { vertex: 1 }),
             "{err}"
         );
     }
