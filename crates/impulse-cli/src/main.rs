@@ -33,9 +33,9 @@ enum Command {
     ///
     /// The mesh must be closed and consistently oriented with faces counter-clockwise seen
     /// from outside; it may be non-convex, of any genus, with polygonal faces. Output fields:
-    /// volume, mass, com [x, y, z], inertia [[3×3]] about the centre of mass with the file's
-    /// axes, principal_moments [3] in increasing order, and principal_axes [3][3] where
-    /// principal_axes[k] is the unit axis of principal_moments[k] (a right-handed set).
+    /// `volume`, `mass`, `com` (3 numbers), `inertia` (3×3, about the centre of mass, with the
+    /// file's axes), `principal_moments` (3, increasing) and `principal_axes` (3×3), where
+    /// `principal_axes[k]` is the unit axis of `principal_moments[k]` (a right-handed set).
     Massprops {
         /// The mesh file (.obj).
         mesh: PathBuf,

@@ -225,7 +225,7 @@ pub enum GeomError {
     /// A Wavefront OBJ file could not be parsed.
     #[error("{source_name}:{line}: {message}")]
     Obj {
-        /// File name or "<string>".
+        /// File name, or `"<string>"` for text not read from a file.
         source_name: String,
         /// 1-based line number.
         line: usize,

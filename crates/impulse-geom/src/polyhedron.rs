@@ -1192,6 +1192,7 @@ pub(crate) mod tests {
         assert!(primitives::geodesic_sphere(0, 1.0).is_err());
         assert!(primitives::geodesic_sphere(1, -1.0).is_err());
         assert!(primitives::regular_prism(2, 1.0, 1.0).is_err());
+        assert!(primitives::corner_tetrahedron_mesh(DVec3::new(1.0, 0.0, 1.0)).is_err());
         assert!(primitives::cuboid(DVec3::new(1.0, f64::NAN, 1.0)).is_err());
     }
 

@@ -1,7 +1,8 @@
 //! Primitive convex polyhedra: boxes, regular prisms and geodesic spheres.
 //!
-//! Each comes as a [`PolyMesh`] (for mass properties or export) and as a validated
-//! [`ConvexPolyhedron`]. All are centred on the origin, which is also their centre of mass.
+//! Each comes as a [`PolyMesh`] (for mass properties or export) and, except the corner
+//! tetrahedron, as a validated [`ConvexPolyhedron`]. All but the corner tetrahedron are centred
+//! on the origin, which is also their centre of mass.
 
 use std::collections::HashMap;
 use std::f64::consts::TAU;
@@ -64,6 +65,27 @@ pub fn cuboid_mesh(half_extents: DVec3) -> Result<PolyMesh, GeomError> {
 /// As [`cuboid_mesh`].
 pub fn cuboid(half_extents: DVec3) -> Result<ConvexPolyhedron, GeomError> {
     ConvexPolyhedron::from_mesh(&cuboid_mesh(half_extents)?)
+}
+
+/// The corner tetrahedron with legs `legs` along the axes: the hull of the origin,
+/// `legs.x·î`, `legs.y·ĵ` and `legs.z·k̂` (thesis Table 6.1 uses legs (5, 4, 3)). Unlike the other
+/// primitives it is not centred: its centre of mass is `legs / 4`.
+///
+/// # Errors
+/// [`GeomError::InvalidParameter`] unless every leg is finite and positive.
+pub fn corner_tetrahedron_mesh(legs: DVec3) -> Result<PolyMesh, GeomError> {
+    let l = DVec3::new(
+        positive("legs.x", legs.x)?,
+        positive("legs.y", legs.y)?,
+        positive("legs.z", legs.z)?,
+    );
+    let vertices = vec![
+        DVec3::ZERO,
+        DVec3::new(l.x, 0.0, 0.0),
+        DVec3::new(0.0, l.y, 0.0),
+        DVec3::new(0.0, 0.0, l.z),
+    ];
+    PolyMesh::new(vertices, [[0u32, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
 }
 
 /// A right prism over a regular `sides`-gon inscribed in a circle of `radius` about the z axis,

@@ -47,6 +47,13 @@ struct Projection {
 }
 
 impl VolumeIntegrals {
+    /// The ten integrals in the column order of thesis Table 6.1:
+    /// (T₁, T_x, T_y, T_z, T_x², T_y², T_z², T_xy, T_yz, T_zx).
+    pub fn to_array(&self) -> [f64; 10] {
+        let (f, s, p) = (self.first, self.second, self.products);
+        [self.volume, f.x, f.y, f.z, s.x, s.y, s.z, p.x, p.y, p.z]
+    }
+
     /// Validates `mesh` (closed, consistently and outwardly oriented, non-degenerate planar
     /// faces; see [`PolyMesh::check_closed`]) and integrates over it about the world origin.
     ///
@@ -241,13 +248,7 @@ pub(crate) mod tests {
 
     /// The tetrahedron of Table 6.1: the hull of the origin, 5î, 4ĵ and 3k̂.
     pub(crate) fn tetrahedron() -> PolyMesh {
-        let v = vec![
-            DVec3::ZERO,
-            DVec3::new(5.0, 0.0, 0.0),
-            DVec3::new(0.0, 4.0, 0.0),
-            DVec3::new(0.0, 0.0, 3.0),
-        ];
-        PolyMesh::new(v, [[0u32, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]).unwrap()
+        primitives::corner_tetrahedron_mesh(DVec3::new(5.0, 4.0, 3.0)).unwrap()
     }
 
     fn rel(a: f64, b: f64) -> f64 {
@@ -259,18 +260,7 @@ pub(crate) mod tests {
     #[test]
     fn table_6_1_tetrahedron_and_cube() {
         let t = VolumeIntegrals::of_mesh(&tetrahedron()).unwrap();
-        let got = [
-            t.volume,
-            t.first.x,
-            t.first.y,
-            t.first.z,
-            t.second.x,
-            t.second.y,
-            t.second.z,
-            t.products.x,
-            t.products.y,
-            t.products.z,
-        ];
+        let got = t.to_array();
         let want = [10.0, 12.5, 10.0, 7.5, 25.0, 16.0, 9.0, 10.0, 6.0, 7.5];
         for (g, w) in got.iter().zip(want) {
             assert!(rel(*g, w) < 1e-14, "{g} vs {w}");
@@ -341,18 +331,7 @@ pub(crate) mod tests {
                 }
             }
         }
-        let got = [
-            t.volume,
-            t.first.x,
-            t.first.y,
-            t.first.z,
-            t.second.x,
-            t.second.y,
-            t.second.z,
-            t.products.x,
-            t.products.y,
-            t.products.z,
-        ];
+        let got = t.to_array();
         for (g, w) in got.iter().zip(r) {
             assert!((g - w).abs() < 1e-12 * r[0].abs().max(1.0), "{g} vs {w}");
         }
