@@ -1,0 +1,18 @@
+//! # impulse-collide — layer 2 of the `impulse` workspace
+//!
+//! **Owns** the narrow phase of collision detection (thesis chapter 2):
+//! - closest features of two convex polyhedra with coherence: V-Clip, Mirtich's robust
+//!   successor of Lin–Canny, which always terminates and reports penetration instead of cycling
+//!   ([`vclip`]); exact sphere–sphere and sphere–polyhedron distances ([`point`]); non-convex
+//!   bodies as sets of convex pieces (eq. 2.1) with a bounding hierarchy ([`compound`]);
+//! - brute-force references for all of these ([`brute`]).
+//!
+//! **Must not know** about collision response, worlds, time stepping or threads: queries take
+//! shapes and poses and return distances, points and features.
+#![forbid(unsafe_code)]
+
+pub mod brute;
+pub mod feature;
+pub mod vclip;
+
+pub use feature::{Closest, Feature, FeaturePair};
