@@ -13,6 +13,29 @@
 
 pub mod brute;
 pub mod feature;
+pub mod point;
+pub mod shape;
 pub mod vclip;
 
 pub use feature::{Closest, Feature, FeaturePair};
+pub use shape::{Convex, PairCache, Piece, Shape, ShapeClosest};
+
+use impulse_geom::GeomError;
+
+/// Why a collision shape or query input was refused.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CollideError {
+    /// Invalid geometry (e.g. a sphere radius that is not positive).
+    #[error(transparent)]
+    Geom(#[from] GeomError),
+    /// A compound shape with no pieces.
+    #[error("a compound shape needs at least one convex piece")]
+    EmptyCompound,
+    /// A piece placed with a NaN or infinite pose.
+    #[error("piece {piece} of the compound has a non-finite pose")]
+    NonFinitePose {
+        /// Index of the piece.
+        piece: usize,
+    },
+}
