@@ -5,7 +5,12 @@
 //!   successor of Lin–Canny, which always terminates and reports penetration instead of cycling
 //!   ([`vclip`]); exact sphere–sphere and sphere–polyhedron distances ([`point`]); non-convex
 //!   bodies as sets of convex pieces (eq. 2.1) with a bounding hierarchy ([`compound`]);
-//! - brute-force references for all of these ([`brute`]).
+//! - brute-force references for all of these ([`brute`]);
+//! - time-of-impact lower bounds: the two routines every motion type supplies (swept box of the
+//!   centre of mass, TOI coefficients; eqs. 2.2–2.5, 2.13–2.15) for fixed, ballistic, cycler,
+//!   spinner and oscillator bodies ([`motion`]), and the pair bound ([`toi`]);
+//! - the collision heap: pairs keyed by their TOI bound, with re-keying and the hysteresis rule
+//!   of §2.4.3 ([`heap`]).
 //!
 //! **Must not know** about collision response, worlds, time stepping or threads: queries take
 //! shapes and poses and return distances, points and features.
@@ -13,11 +18,16 @@
 
 pub mod brute;
 pub mod feature;
+pub mod heap;
+pub mod motion;
 pub mod point;
 pub mod shape;
+pub mod toi;
 pub mod vclip;
 
 pub use feature::{Closest, Feature, FeaturePair};
+pub use heap::{CollisionHeap, HeapError};
+pub use motion::{Motion, MotionError};
 pub use shape::{Convex, PairCache, Piece, Shape, ShapeClosest};
 
 use impulse_geom::GeomError;
