@@ -17,6 +17,8 @@
 #![forbid(unsafe_code)]
 
 pub mod brute;
+#[cfg(test)]
+mod conservative;
 pub mod feature;
 pub mod heap;
 pub mod motion;
