@@ -4,7 +4,7 @@
 //! - closest features of two convex polyhedra with coherence: V-Clip, Mirtich's robust
 //!   successor of Lin–Canny, which always terminates and reports penetration instead of cycling
 //!   ([`vclip`]); exact sphere–sphere and sphere–polyhedron distances ([`point`]); non-convex
-//!   bodies as sets of convex pieces (eq. 2.1) with a bounding hierarchy ([`compound`]);
+//!   bodies as sets of convex pieces (eq. 2.1) with a bounding hierarchy ([`shape`]);
 //! - brute-force references for all of these ([`brute`]);
 //! - time-of-impact lower bounds: the two routines every motion type supplies (swept box of the
 //!   centre of mass, TOI coefficients; eqs. 2.2–2.5, 2.13–2.15) for fixed, ballistic, cycler,
