@@ -8,7 +8,12 @@
 //! Commands:
 //! - `impulse massprops <mesh.obj> [--density D | --mass M]`: exact mass properties of a closed
 //!   polygon mesh (thesis chapter 6), printed as JSON.
+//! - `impulse dynamics <model.urdf> [--q … --qd … --tau …] [--gravity gx,gy,gz]`: forward
+//!   dynamics `{"qdd": [...]}` of a URDF multibody (thesis chapter 4); `--mass-matrix` prints
+//!   `{"M": [[...]]}`, `--inverse --qdd …` prints `{"tau": [...]}`, `--joints` the joint order.
 #![forbid(unsafe_code)]
+
+mod dynamics;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -46,6 +51,14 @@ enum Command {
         #[arg(long, allow_negative_numbers = true)]
         mass: Option<f64>,
     },
+    /// Forward dynamics, inverse dynamics or the mass matrix of a URDF multibody, as JSON.
+    ///
+    /// Vectors are comma-separated numbers in the model's joint order: depth-first from the
+    /// root link, the children of a link in the order their joints appear in the file; fixed
+    /// joints have no coordinate (`--joints` lists the order). Default output: the joint
+    /// accelerations `{"qdd": [...]}` for `--q`, `--qd`, `--tau` (each defaults to zeros).
+    /// Passive joint damping and friction from `<dynamics>` are not applied.
+    Dynamics(dynamics::DynamicsArgs),
 }
 
 fn massprops(mesh: &Path, density: Option<f64>, mass: Option<f64>) -> Result<String, String> {
@@ -119,6 +132,7 @@ fn main() -> ExitCode {
             density,
             mass,
         } => massprops(mesh, *density, *mass),
+        Command::Dynamics(args) => dynamics::run(args),
     };
     match result {
         Ok(text) => {

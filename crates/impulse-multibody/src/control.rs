@@ -1,0 +1,892 @@
+//! Joint controllers at finite rates and the simulation loop that schedules them (thesis
+//! §5.4).
+//!
+//! A controller samples `(q, v)` at its update times `t_0 + k·period` and its output is held
+//! constant until the next update (zero-order hold, §5.4.1: "it commands actuator forces which
+//! will persist until the next update"). The simulation integrates exactly up to every update
+//! time (§5.4.2: control events share the time-ordered schedule, and the simulation is stopped
+//! there), so no step straddles an update. Passive joint elements are not scheduled: they are
+//! re-evaluated in every derivative evaluation.
+
+use std::any::Any;
+
+use crate::dynamics::{Workspace, forward_dynamics, inverse_dynamics};
+use crate::error::MultibodyError;
+use crate::integrate::{Accel, Integrator, IntegratorStats, Stepper};
+use crate::model::{Model, check_len};
+
+/// What a controller sees at an update: the time, the model and the sampled state.
+#[derive(Debug)]
+pub struct ControlInput<'a> {
+    /// Simulation time of the update (s).
+    pub time: f64,
+    /// The model.
+    pub model: &'a Model,
+    /// Configuration (nq).
+    pub q: &'a [f64],
+    /// Velocity (nv).
+    pub v: &'a [f64],
+}
+
+/// A controller run at its own rate by a [`Simulation`].
+///
+/// `update` writes the generalized force (nv entries, zeroed before the call) to hold until the
+/// next update; the outputs of all enabled controllers are summed with the applied forces.
+/// High-level controllers (the thesis's callbacks, e.g. finite-state machines) implement this
+/// trait too and may write nothing.
+pub trait Controller {
+    /// Update period (s), > 0 and finite.
+    fn period(&self) -> f64;
+    /// Samples the state and writes the output to hold (nv).
+    fn update(&mut self, input: &ControlInput<'_>, output: &mut [f64]);
+    /// `self` as `Any`, for [`Simulation::controller_mut`]: implement as `self`.
+    fn as_any_mut(&mut self) -> &mut dyn Any;
+}
+
+/// Positional/velocity PD control of one joint (thesis §5.4.1, Fig. 5.13):
+/// `Q = −k_p (q − q_des) − k_v (q̇ − q̇_des)`. With `q̇_des = 0` this is the thesis's positional
+/// PD; with `k_p = 0` it regulates velocity.
+///
+/// A prismatic joint carrying weight m·g along its axis settles at `q_des − m g / k_p`.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct JointPd {
+    /// Joint index in coordinate order.
+    pub joint: usize,
+    /// Position gain k_p (N/m or N·m/rad).
+    pub kp: f64,
+    /// Velocity gain k_v (N·s/m or N·m·s/rad).
+    pub kv: f64,
+    /// Desired position.
+    pub q_des: f64,
+    /// Desired velocity.
+    pub qd_des: f64,
+    /// Update period (s).
+    pub period: f64,
+}
+
+impl JointPd {
+    /// A PD controller on joint `joint` with target 0.
+    #[must_use]
+    pub fn new(joint: usize, kp: f64, kv: f64, period: f64) -> Self {
+        JointPd {
+            joint,
+            kp,
+            kv,
+            q_des: 0.0,
+            qd_des: 0.0,
+            period,
+        }
+    }
+}
+
+fn joint_slots(model: &Model, joint: usize) -> (usize, usize) {
+    (
+        model.nq() - model.joint_count() + joint,
+        model.base_dofs() + joint,
+    )
+}
+
+impl Controller for JointPd {
+    fn period(&self) -> f64 {
+        self.period
+    }
+    fn update(&mut self, input: &ControlInput<'_>, output: &mut [f64]) {
+        let (qi, vi) = joint_slots(input.model, self.joint);
+        output[vi] = -self.kp * (input.q[qi] - self.q_des) - self.kv * (input.v[vi] - self.qd_des);
+    }
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}
+
+/// PID control of one joint, thesis eq. (5.15):
+/// `Q = −k_p (q − q_des) − k_v (q̇ − q̇_des) − k_i ∫(q − q_des) dt`.
+/// The integral is accumulated at the controller's rate (rectangle rule on the samples), the
+/// way a digital controller does. It removes the static offset of PD under a constant load.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct JointPid {
+    /// The PD part.
+    pub pd: JointPd,
+    /// Integral gain k_i (N/(m·s) or N·m/(rad·s)).
+    pub ki: f64,
+    /// Accumulated `∫(q − q_des) dt`.
+    pub integral: f64,
+}
+
+impl JointPid {
+    /// A PID controller on joint `joint` with target 0.
+    #[must_use]
+    pub fn new(joint: usize, kp: f64, kv: f64, ki: f64, period: f64) -> Self {
+        JointPid {
+            pd: JointPd::new(joint, kp, kv, period),
+            ki,
+            integral: 0.0,
+        }
+    }
+}
+
+impl Controller for JointPid {
+    fn period(&self) -> f64 {
+        self.pd.period
+    }
+    fn update(&mut self, input: &ControlInput<'_>, output: &mut [f64]) {
+        let (qi, vi) = joint_slots(input.model, self.pd.joint);
+        let e = input.q[qi] - self.pd.q_des;
+        self.integral += e * self.pd.period;
+        output[vi] =
+            -self.pd.kp * e - self.pd.kv * (input.v[vi] - self.pd.qd_des) - self.ki * self.integral;
+    }
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}
+
+/// Computed-torque control of all joints of a fixed-base model, thesis eq. (5.16) with no
+/// contact force: `Q = M(q) q̈_des + h(q, q̇) − Q_passive(q, q̇)`, evaluated by inverse dynamics,
+/// with `q̈_des = q̈_ref + k_p (q_ref − q) + k_v (q̇_ref − q̇)`. Substituted into the dynamics
+/// it gives `q̈ = q̈_des` at the update instant (exactly, while the output is fresh).
+#[derive(Clone, Debug)]
+pub struct ComputedTorque {
+    /// Reference positions (one per joint).
+    pub q_ref: Vec<f64>,
+    /// Reference velocities.
+    pub qd_ref: Vec<f64>,
+    /// Reference (feed-forward) accelerations.
+    pub qdd_ref: Vec<f64>,
+    /// Position gain of the outer loop (1/s²).
+    pub kp: f64,
+    /// Velocity gain of the outer loop (1/s).
+    pub kv: f64,
+    period: f64,
+    ws: Workspace,
+    qdd: Vec<f64>,
+    passive: Vec<f64>,
+}
+
+impl ComputedTorque {
+    /// A computed-torque controller for `model` holding every joint at 0.
+    ///
+    /// # Errors
+    /// [`MultibodyError::InvalidArgument`] for a floating base (its base cannot be actuated,
+    /// so `q̈ = q̈_des` is unreachable in general) or a bad period.
+    pub fn new(model: &Model, kp: f64, kv: f64, period: f64) -> Result<Self, MultibodyError> {
+        if model.is_floating() {
+            return Err(MultibodyError::InvalidArgument {
+                what: "computed torque",
+                reason: "needs a fixed base".to_owned(),
+            });
+        }
+        check_period(period)?;
+        let n = model.joint_count();
+        Ok(ComputedTorque {
+            q_ref: vec![0.0; n],
+            qd_ref: vec![0.0; n],
+            qdd_ref: vec![0.0; n],
+            kp,
+            kv,
+            period,
+            ws: Workspace::new(model),
+            qdd: vec![0.0; n],
+            passive: vec![0.0; n],
+        })
+    }
+}
+
+impl Controller for ComputedTorque {
+    fn period(&self) -> f64 {
+        self.period
+    }
+    fn update(&mut self, input: &ControlInput<'_>, output: &mut [f64]) {
+        for j in 0..self.qdd.len() {
+            self.qdd[j] = self.qdd_ref[j]
+                + self.kp * (self.q_ref[j] - input.q[j])
+                + self.kv * (self.qd_ref[j] - input.v[j]);
+        }
+        // Dimensions were checked at creation; the model is the one the controller was made for.
+        if inverse_dynamics(
+            input.model,
+            &mut self.ws,
+            input.q,
+            input.v,
+            &self.qdd,
+            None,
+            output,
+        )
+        .is_err()
+        {
+            output.iter_mut().for_each(|x| *x = 0.0);
+            return;
+        }
+        self.passive.iter_mut().for_each(|x| *x = 0.0);
+        if input
+            .model
+            .add_passive_forces(input.q, input.v, &mut self.passive)
+            .is_ok()
+        {
+            for (o, p) in output.iter_mut().zip(&self.passive) {
+                *o -= p;
+            }
+        }
+    }
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}
+
+fn check_period(period: f64) -> Result<(), MultibodyError> {
+    if period.is_finite() && period > 0.0 {
+        Ok(())
+    } else {
+        Err(MultibodyError::InvalidArgument {
+            what: "controller period",
+            reason: format!("{period} must be finite and > 0"),
+        })
+    }
+}
+
+/// Identifies a controller added to a [`Simulation`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub struct ControllerId(usize);
+
+struct Slot {
+    ctrl: Box<dyn Controller>,
+    start: f64,
+    period: f64,
+    /// Updates done so far; the next is at `start + count·period`.
+    count: u64,
+    output: Vec<f64>,
+    enabled: bool,
+    /// Re-enabled since the last update: update at the next opportunity, even off-grid.
+    pending: bool,
+}
+
+impl Slot {
+    fn next_time(&self) -> f64 {
+        self.start + self.count as f64 * self.period
+    }
+}
+
+/// The right-hand side during one control interval.
+struct Rhs<'a> {
+    model: &'a Model,
+    ws: &'a mut Workspace,
+    held: &'a [f64],
+    tau: &'a mut [f64],
+}
+
+impl Accel for Rhs<'_> {
+    fn accel(
+        &mut self,
+        _t: f64,
+        q: &[f64],
+        v: &[f64],
+        vdot: &mut [f64],
+    ) -> Result<(), MultibodyError> {
+        self.tau.copy_from_slice(self.held);
+        // Passive elements inside every derivative evaluation (§5.4.1).
+        self.model.add_passive_forces(q, v, self.tau)?;
+        forward_dynamics(self.model, self.ws, q, v, self.tau, None, vdot)
+    }
+}
+
+/// A multibody moving under gravity, passive joint elements, applied forces and scheduled
+/// controllers, advanced by an [`Integrator`].
+pub struct Simulation {
+    model: Model,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    t: f64,
+    integrator: Integrator,
+    stepper: Stepper,
+    ws: Workspace,
+    applied: Vec<f64>,
+    held: Vec<f64>,
+    tau: Vec<f64>,
+    slots: Vec<Slot>,
+}
+
+impl std::fmt::Debug for Simulation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulation")
+            .field("t", &self.t)
+            .field("q", &self.q)
+            .field("v", &self.v)
+            .field("controllers", &self.slots.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Simulation {
+    /// A simulation of `model` starting at t = 0 from `(q, v)`.
+    ///
+    /// # Errors
+    /// [`MultibodyError::DimensionMismatch`] for wrong lengths, [`MultibodyError::InvalidArgument`]
+    /// for a bad integrator setting or a non-finite state.
+    pub fn new(
+        model: Model,
+        q: Vec<f64>,
+        v: Vec<f64>,
+        integrator: Integrator,
+    ) -> Result<Self, MultibodyError> {
+        check_len("q", model.nq(), q.len())?;
+        check_len("v", model.nv(), v.len())?;
+        integrator.validate()?;
+        if !(q.iter().chain(&v).all(|x| x.is_finite())) {
+            return Err(MultibodyError::InvalidArgument {
+                what: "state",
+                reason: "not finite".to_owned(),
+            });
+        }
+        let nv = model.nv();
+        let mut q = q;
+        crate::integrate::normalize_config(&model, &mut q);
+        Ok(Simulation {
+            stepper: Stepper::new(&model, &integrator),
+            ws: Workspace::new(&model),
+            q,
+            v,
+            t: 0.0,
+            integrator,
+            applied: vec![0.0; nv],
+            held: vec![0.0; nv],
+            tau: vec![0.0; nv],
+            slots: Vec::new(),
+            model,
+        })
+    }
+
+    /// The model.
+    #[must_use]
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The model, mutable (gravity and passive elements may be changed between calls).
+    pub fn model_mut(&mut self) -> &mut Model {
+        &mut self.model
+    }
+
+    /// Current time (s).
+    #[must_use]
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// Current configuration (nq).
+    #[must_use]
+    pub fn q(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// Current velocity (nv).
+    #[must_use]
+    pub fn v(&self) -> &[f64] {
+        &self.v
+    }
+
+    /// Integration counters.
+    #[must_use]
+    pub fn stats(&self) -> IntegratorStats {
+        self.stepper.stats
+    }
+
+    /// Replaces the state (e.g. after a collision impulse changed `v`).
+    ///
+    /// # Errors
+    /// [`MultibodyError::DimensionMismatch`] for wrong lengths.
+    pub fn set_state(&mut self, q: &[f64], v: &[f64]) -> Result<(), MultibodyError> {
+        check_len("q", self.model.nq(), q.len())?;
+        check_len("v", self.model.nv(), v.len())?;
+        self.q.copy_from_slice(q);
+        self.v.copy_from_slice(v);
+        crate::integrate::normalize_config(&self.model, &mut self.q);
+        Ok(())
+    }
+
+    /// Sets constant applied generalized forces (nv), added to the controllers' outputs.
+    ///
+    /// # Errors
+    /// [`MultibodyError::DimensionMismatch`] for a wrong length.
+    pub fn set_applied_forces(&mut self, tau: &[f64]) -> Result<(), MultibodyError> {
+        check_len("applied forces", self.model.nv(), tau.len())?;
+        self.applied.copy_from_slice(tau);
+        Ok(())
+    }
+
+    /// Adds a controller; its first update is now and then every `period` seconds.
+    ///
+    /// # Errors
+    /// [`MultibodyError::InvalidArgument`] if its period is not finite and positive.
+    pub fn add_controller(
+        &mut self,
+        ctrl: Box<dyn Controller>,
+    ) -> Result<ControllerId, MultibodyError> {
+        let period = ctrl.period();
+        check_period(period)?;
+        self.slots.push(Slot {
+            ctrl,
+            start: self.t,
+            period,
+            count: 0,
+            output: vec![0.0; self.model.nv()],
+            enabled: true,
+            pending: false,
+        });
+        Ok(ControllerId(self.slots.len() - 1))
+    }
+
+    /// The controller `id` as its concrete type (to change targets or gains).
+    pub fn controller_mut<T: 'static>(&mut self, id: ControllerId) -> Option<&mut T> {
+        self.slots
+            .get_mut(id.0)?
+            .ctrl
+            .as_any_mut()
+            .downcast_mut::<T>()
+    }
+
+    /// Enables or disables a controller. A disabled controller contributes nothing and is not
+    /// updated. Re-enabled (the thesis's setPID), it updates at once — at the current time,
+    /// before any further integration — and then continues on its original grid
+    /// `t₀ + k·period`.
+    ///
+    /// # Errors
+    /// [`MultibodyError::UnknownName`] for an unknown id.
+    pub fn set_enabled(&mut self, id: ControllerId, enabled: bool) -> Result<(), MultibodyError> {
+        let slot = self
+            .slots
+            .get_mut(id.0)
+            .ok_or(MultibodyError::UnknownName {
+                kind: "controller",
+                name: id.0.to_string(),
+            })?;
+        if enabled && !slot.enabled {
+            slot.pending = true;
+        }
+        slot.enabled = enabled;
+        if !enabled {
+            slot.pending = false;
+            slot.output.iter_mut().for_each(|x| *x = 0.0);
+        }
+        Ok(())
+    }
+
+    /// The output a controller currently holds (nv).
+    #[must_use]
+    pub fn controller_output(&self, id: ControllerId) -> Option<&[f64]> {
+        self.slots.get(id.0).map(|s| s.output.as_slice())
+    }
+
+    /// Kinetic plus gravitational potential energy (J) at the current state.
+    ///
+    /// # Errors
+    /// Never for a consistent simulation (lengths are fixed).
+    pub fn energy(&mut self) -> Result<f64, MultibodyError> {
+        self.ws.update_kinematics(&self.model, &self.q, &self.v)?;
+        Ok(self.ws.kinetic_energy(&self.model) + self.ws.potential_energy(&self.model))
+    }
+
+    /// A workspace whose kinematics are those of the current state (for queries such as
+    /// momentum or link poses).
+    ///
+    /// # Errors
+    /// Never for a consistent simulation (lengths are fixed).
+    pub fn kinematics(&mut self) -> Result<&Workspace, MultibodyError> {
+        self.ws.update_kinematics(&self.model, &self.q, &self.v)?;
+        Ok(&self.ws)
+    }
+
+    /// Runs the controllers due at the current time and sums the held outputs.
+    fn fire_due(&mut self) {
+        let input = ControlInput {
+            time: self.t,
+            model: &self.model,
+            q: &self.q,
+            v: &self.v,
+        };
+        for slot in &mut self.slots {
+            let due = slot.next_time() <= self.t;
+            if slot.enabled && (due || slot.pending) {
+                slot.pending = false;
+                slot.output.iter_mut().for_each(|x| *x = 0.0);
+                slot.ctrl.update(&input, &mut slot.output);
+            }
+            if due {
+                // Skip every period that is already due (only possible after set_state/time
+                // jumps); the next update is strictly in the future.
+                while slot.next_time() <= self.t {
+                    slot.count += 1;
+                }
+            }
+        }
+        self.held.copy_from_slice(&self.applied);
+        for slot in self.slots.iter().filter(|s| s.enabled) {
+            for (h, o) in self.held.iter_mut().zip(&slot.output) {
+                *h += o;
+            }
+        }
+    }
+
+    /// Advances to time `t_end` (s), stopping exactly at every controller update on the way.
+    ///
+    /// # Errors
+    /// [`MultibodyError::InvalidArgument`] if `t_end` is not finite or lies in the past;
+    /// [`MultibodyError::StepSizeUnderflow`] or [`MultibodyError::NonFiniteState`] from the
+    /// integrator (the state is then the one at the failure).
+    pub fn run_until(&mut self, t_end: f64) -> Result<(), MultibodyError> {
+        if !t_end.is_finite() || t_end < self.t {
+            return Err(MultibodyError::InvalidArgument {
+                what: "end time",
+                reason: format!("{t_end} must be finite and >= the current time {}", self.t),
+            });
+        }
+        loop {
+            self.fire_due();
+            if self.t >= t_end {
+                return Ok(());
+            }
+            let next = self.slots.iter().map(Slot::next_time).fold(t_end, f64::min);
+            let mut rhs = Rhs {
+                model: &self.model,
+                ws: &mut self.ws,
+                held: &self.held,
+                tau: &mut self.tau,
+            };
+            self.stepper.advance(
+                &self.integrator,
+                &self.model,
+                &mut rhs,
+                self.t,
+                next,
+                &mut self.q,
+                &mut self.v,
+            )?;
+            self.t = next;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrate::AdaptiveRk4;
+    use crate::model::{BaseKind, JointPassive, JointSpec, ModelBuilder};
+    use glam::{DMat3, DVec3};
+    use impulse_geom::{Pose, SpatialInertia};
+
+    /// Settled positions against their analytic values (after many time constants).
+    const SETTLED: f64 = 1e-6;
+    /// Piecewise-polynomial motion that RK4 integrates exactly, up to rounding.
+    const EXACT: f64 = 1e-10;
+
+    fn block(m: f64) -> SpatialInertia {
+        SpatialInertia::new(m, DVec3::ZERO, DMat3::IDENTITY * (0.1 * m))
+    }
+
+    /// A mass `m` on a prismatic joint along +z under gravity −z (thesis Fig. 5.14).
+    fn slider(m: f64) -> Model {
+        let mut b = ModelBuilder::new(BaseKind::Fixed);
+        b.link("ground", SpatialInertia::ZERO)
+            .link("piston", block(m))
+            .joint(JointSpec::prismatic(
+                "slide",
+                "ground",
+                "piston",
+                Pose::IDENTITY,
+                DVec3::Z,
+            ));
+        b.build().unwrap()
+    }
+
+    fn tight() -> Integrator {
+        Integrator::AdaptiveRk4(AdaptiveRk4 {
+            rel_tol: 1e-10,
+            abs_tol: 1e-10,
+            ..AdaptiveRk4::default()
+        })
+    }
+
+    /// PD at 1 kHz holding a prismatic joint that carries m·g settles at `q_des − m g / k_p`
+    /// (thesis §5.4.1); PID at the same rate removes the offset.
+    #[test]
+    fn pd_settles_at_static_deflection_and_pid_removes_it() {
+        let (m, kp, kv, q_des) = (2.0, 1000.0, 60.0, 0.25);
+        let mut sim = Simulation::new(slider(m), vec![0.0], vec![0.0], tight()).unwrap();
+        let mut pd = JointPd::new(0, kp, kv, 1e-3);
+        pd.q_des = q_des;
+        sim.add_controller(Box::new(pd)).unwrap();
+        sim.run_until(4.0).unwrap();
+        let want = q_des - m * 9.81 / kp;
+        println!("PD slider: q = {:.9}, analytic {want:.9}", sim.q()[0]);
+        assert!((sim.q()[0] - want).abs() < SETTLED && sim.v()[0].abs() < SETTLED);
+
+        let mut sim = Simulation::new(slider(m), vec![0.0], vec![0.0], tight()).unwrap();
+        let mut pid = JointPid::new(0, kp, kv, 2000.0, 1e-3);
+        pid.pd.q_des = q_des;
+        sim.add_controller(Box::new(pid)).unwrap();
+        sim.run_until(12.0).unwrap();
+        println!("PID slider: q = {:.9}", sim.q()[0]);
+        assert!((sim.q()[0] - q_des).abs() < SETTLED);
+    }
+
+    /// A PD-held revolute arm under its own weight settles where `k_p (q_des − q) = m g c cos q`
+    /// (solved by Newton's method here).
+    #[test]
+    fn pd_holds_an_arm_at_the_analytic_deflection() {
+        let (m, c, kp, kv) = (1.5, 0.4, 80.0, 6.0);
+        let mut b = ModelBuilder::new(BaseKind::Fixed);
+        let rod = SpatialInertia::new(m, DVec3::new(c, 0.0, 0.0), DMat3::IDENTITY * 0.02);
+        b.gravity(DVec3::new(0.0, -9.81, 0.0))
+            .link("ground", SpatialInertia::ZERO)
+            .link("arm", rod)
+            .joint(JointSpec::revolute(
+                "shoulder",
+                "ground",
+                "arm",
+                Pose::IDENTITY,
+                DVec3::Z,
+            ));
+        let mut sim = Simulation::new(b.build().unwrap(), vec![0.0], vec![0.0], tight()).unwrap();
+        sim.add_controller(Box::new(JointPd::new(0, kp, kv, 1e-3)))
+            .unwrap();
+        sim.run_until(8.0).unwrap();
+        let mut q = 0.0f64;
+        for _ in 0..50 {
+            let f = kp * (0.0 - q) - m * 9.81 * c * q.cos();
+            let df = -kp + m * 9.81 * c * q.sin();
+            q -= f / df;
+        }
+        println!("PD arm: q = {:.9}, analytic {q:.9}", sim.q()[0]);
+        assert!((sim.q()[0] - q).abs() < SETTLED);
+    }
+
+    /// Records its update times and outputs a torque that depends on the update count.
+    struct Recorder {
+        period: f64,
+        times: Vec<f64>,
+        amplitude: f64,
+    }
+
+    impl Controller for Recorder {
+        fn period(&self) -> f64 {
+            self.period
+        }
+        fn update(&mut self, input: &ControlInput<'_>, output: &mut [f64]) {
+            let k = self.times.len();
+            self.times.push(input.time);
+            output[0] = self.amplitude * if k % 2 == 0 { 1.0 } else { -0.5 };
+        }
+        fn as_any_mut(&mut self) -> &mut dyn Any {
+            self
+        }
+    }
+
+    /// Updates happen exactly at t₀ + k·period for two interleaved rates; the output is held
+    /// between updates: a free rotor driven by the two piecewise-constant torques follows the
+    /// exact piecewise-quadratic motion (RK4 is exact on each interval, so any step that
+    /// straddled an update would show). Disabling a controller removes its contribution.
+    #[test]
+    fn controllers_run_on_schedule_with_zero_order_hold() {
+        let mut b = ModelBuilder::new(BaseKind::Fixed);
+        b.gravity(DVec3::ZERO)
+            .link("ground", SpatialInertia::ZERO)
+            .link("rotor", block(1.0))
+            .joint(JointSpec::revolute(
+                "spin",
+                "ground",
+                "rotor",
+                Pose::IDENTITY,
+                DVec3::Z,
+            ));
+        let inertia = 0.1;
+        let mut sim = Simulation::new(
+            b.build().unwrap(),
+            vec![0.0],
+            vec![0.0],
+            Integrator::Rk4 { step: 3e-4 },
+        )
+        .unwrap();
+        let fast = sim
+            .add_controller(Box::new(Recorder {
+                period: 1e-3,
+                times: vec![],
+                amplitude: 2.0,
+            }))
+            .unwrap();
+        let slow = sim
+            .add_controller(Box::new(Recorder {
+                period: 1e-2,
+                times: vec![],
+                amplitude: 0.7,
+            }))
+            .unwrap();
+        sim.run_until(0.05).unwrap();
+        let ft = sim.controller_mut::<Recorder>(fast).unwrap().times.clone();
+        let st = sim.controller_mut::<Recorder>(slow).unwrap().times.clone();
+        assert_eq!(ft.len(), 51);
+        assert_eq!(st.len(), 6);
+        for (k, t) in ft.iter().enumerate() {
+            assert_eq!(*t, k as f64 * 1e-3);
+        }
+        for (k, t) in st.iter().enumerate() {
+            assert_eq!(*t, k as f64 * 1e-2);
+        }
+        // Exact motion under the held torques.
+        let torque = |t: f64| {
+            let kf = (t / 1e-3 + 1e-9).floor() as usize;
+            let ks = (t / 1e-2 + 1e-9).floor() as usize;
+            2.0 * if kf % 2 == 0 { 1.0 } else { -0.5 } + 0.7 * if ks % 2 == 0 { 1.0 } else { -0.5 }
+        };
+        let (mut q, mut w) = (0.0, 0.0);
+        for k in 0..50 {
+            let a = torque(k as f64 * 1e-3 + 5e-4) / inertia;
+            q += w * 1e-3 + 0.5 * a * 1e-6;
+            w += a * 1e-3;
+        }
+        println!("ZOH rotor: q = {:.12} vs exact {q:.12}", sim.q()[0]);
+        assert!((sim.q()[0] - q).abs() < EXACT && (sim.v()[0] - w).abs() < EXACT);
+        // The fast controller's output is held; disabling it zeroes it.
+        assert_eq!(sim.controller_output(fast).unwrap()[0], 2.0);
+        sim.set_enabled(fast, false).unwrap();
+        assert_eq!(sim.controller_output(fast).unwrap()[0], 0.0);
+        let w0 = sim.v()[0];
+        sim.run_until(0.06).unwrap();
+        // Only the slow controller acted on [0.05, 0.06): its output at t = 0.05 (k = 5, odd).
+        let expect = w0 + 0.7 * -0.5 / inertia * 0.01;
+        assert!((sim.v()[0] - expect).abs() < EXACT);
+        assert_eq!(
+            sim.controller_mut::<Recorder>(fast).unwrap().times.len(),
+            51
+        );
+        // Re-enabled, it resumes on its own grid.
+        sim.set_enabled(fast, true).unwrap();
+        sim.run_until(0.0625).unwrap();
+        let ft = &sim.controller_mut::<Recorder>(fast).unwrap().times;
+        assert_eq!(ft[51..], [0.06, 61.0 * 1e-3, 62.0 * 1e-3]);
+    }
+
+    /// Computed torque (eq. 5.16): right after an update, forward dynamics gives q̈ = q̈_des;
+    /// it then tracks a reference.
+    #[test]
+    fn computed_torque_gives_the_commanded_acceleration() {
+        let mut rng = crate::testutil::rng(6301);
+        let mut spec = crate::testutil::random_spec(&mut rng, 5, BaseKind::Fixed, true, true);
+        for (_, _, j) in spec.joints.iter_mut() {
+            j.passive = JointPassive {
+                stiffness: 3.0,
+                damping: 0.5,
+                ..JointPassive::default()
+            };
+        }
+        let model = spec.model();
+        let n = model.nv();
+        let (q, v) = crate::testutil::random_state(&mut rng, &model);
+        let mut ct = ComputedTorque::new(&model, 0.0, 0.0, 1e-3).unwrap();
+        ct.qdd_ref = (0..n).map(|k| 0.3 * k as f64 - 0.5).collect();
+        let mut out = vec![0.0; n];
+        ct.update(
+            &ControlInput {
+                time: 0.0,
+                model: &model,
+                q: &q,
+                v: &v,
+            },
+            &mut out,
+        );
+        model.add_passive_forces(&q, &v, &mut out).unwrap();
+        let mut a = vec![0.0; n];
+        forward_dynamics(
+            &model,
+            &mut Workspace::new(&model),
+            &q,
+            &v,
+            &out,
+            None,
+            &mut a,
+        )
+        .unwrap();
+        for (x, y) in a.iter().zip(&ct.qdd_ref) {
+            assert!((x - y).abs() < EXACT * (1.0 + y.abs()), "{a:?}");
+        }
+        // Tracking: hold the reference pose from a disturbed start.
+        let mut ct = ComputedTorque::new(&model, 400.0, 40.0, 1e-3).unwrap();
+        ct.q_ref = vec![0.2; n];
+        let mut sim = Simulation::new(model.clone(), q, v, tight()).unwrap();
+        sim.add_controller(Box::new(ct)).unwrap();
+        sim.run_until(3.0).unwrap();
+        for x in sim.q() {
+            assert!((x - 0.2).abs() < SETTLED, "{:?}", sim.q());
+        }
+        assert!(ComputedTorque::new(&model, 1.0, 1.0, 0.0).is_err());
+    }
+
+    /// A passive spring is evaluated at every derivative evaluation: a spring-loaded rotor is
+    /// the exact harmonic oscillator; with a damper its energy decays monotonically.
+    #[test]
+    fn passive_spring_and_damper() {
+        let (k, inertia) = (4.0, 0.1);
+        let mut b = ModelBuilder::new(BaseKind::Fixed);
+        b.gravity(DVec3::ZERO)
+            .link("ground", SpatialInertia::ZERO)
+            .link("rotor", block(1.0))
+            .joint(
+                JointSpec::revolute("spin", "ground", "rotor", Pose::IDENTITY, DVec3::Z)
+                    .with_passive(JointPassive::spring(k, 0.1)),
+            );
+        let model = b.build().unwrap();
+        let mut sim = Simulation::new(model.clone(), vec![0.6], vec![0.0], tight()).unwrap();
+        let w = (k / inertia).sqrt();
+        for step in 1..=20 {
+            let t = 0.1 * step as f64;
+            sim.run_until(t).unwrap();
+            let want = 0.1 + 0.5 * (w * t).cos();
+            assert!(
+                (sim.q()[0] - want).abs() < 1e-8,
+                "t = {t}: {} vs {want}",
+                sim.q()[0]
+            );
+        }
+        let mut damped = model;
+        damped
+            .set_passive(
+                0,
+                JointPassive {
+                    damping: 0.2,
+                    ..JointPassive::spring(k, 0.1)
+                },
+            )
+            .unwrap();
+        let mut sim = Simulation::new(damped, vec![0.6], vec![0.0], tight()).unwrap();
+        let energy = |s: &mut Simulation| s.energy().unwrap() + 0.5 * k * (s.q()[0] - 0.1).powi(2);
+        let mut last = energy(&mut sim);
+        for step in 1..=50 {
+            sim.run_until(0.05 * step as f64).unwrap();
+            let e = energy(&mut sim);
+            assert!(e < last, "energy rose at step {step}");
+            last = e;
+        }
+    }
+
+    #[test]
+    fn bad_arguments_are_errors() {
+        let model = slider(1.0);
+        assert!(Simulation::new(model.clone(), vec![0.0, 1.0], vec![0.0], tight()).is_err());
+        assert!(Simulation::new(model.clone(), vec![f64::NAN], vec![0.0], tight()).is_err());
+        assert!(
+            Simulation::new(
+                model.clone(),
+                vec![0.0],
+                vec![0.0],
+                Integrator::Rk4 { step: -1.0 }
+            )
+            .is_err()
+        );
+        let mut sim = Simulation::new(model, vec![0.0], vec![0.0], tight()).unwrap();
+        assert!(
+            sim.add_controller(Box::new(JointPd::new(0, 1.0, 1.0, 0.0)))
+                .is_err()
+        );
+        sim.run_until(0.1).unwrap();
+        assert!(sim.run_until(0.05).is_err());
+        assert!(sim.run_until(f64::NAN).is_err());
+    }
+}
