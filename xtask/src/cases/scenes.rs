@@ -1,0 +1,418 @@
+//! Scene validation cases (thesis chapter 7; the digest's validation table V6–V17): each runs a
+//! bundled scene from `fixtures/scenes/` through `impulse-sim` and compares what happened with
+//! a closed form or a conservation law.
+//!
+//! - V6 block on ramp: stop time and distance against constant deceleration; creep after.
+//! - V7 sliding to rolling: t*, s*, v* of a solid ball against the closed forms.
+//! - V9 two-ball collision: post-impact velocities against v0(1 ∓ e)/2.
+//! - V10 chain of balls: the far ball leaves at the striker's speed, the others stay.
+//! - V13 block drop: two blocks end stacked and at rest, never interpenetrating.
+//! - V15 tumbling box: 26 convex bodies, gravity off: elastic energy conserved; dissipative
+//!   energy never increases; no interpenetration.
+//! - Bullet: a 1 km/s spinning body never passes through a 1 mm plate.
+//! - Determinism: identical trajectory hashes with 1 and 2 threads.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use impulse_sim::{Recording, Scene, World, run};
+
+use crate::validate::case::{Case, Check, Metric};
+
+/// Relative tolerance of the V6 and V7 comparisons (digest: ±2 %).
+const SCENE_REL: f64 = 0.02;
+/// V9: post-impact velocities, relative (digest: 1e-6).
+const TWO_BALL_REL: f64 = 1e-6;
+/// V15 elastic: kinetic energy conservation, relative (digest: 1e-6).
+const ELASTIC_ENERGY_REL: f64 = 1e-6;
+/// V15 dissipative: the largest rise of kinetic energy between frames, relative (digest:
+/// monotone within 1e-9).
+const MONOTONE_ENERGY_REL: f64 = 1e-9;
+/// V10: speeds of the balls that should stay, and of the striker, relative to v0 (digest 5 %).
+const CHAIN_STILL_REL: f64 = 0.05;
+/// V10: the striker must not recoil: its velocity may be negative only by rounding (relative
+/// to v0).
+const CHAIN_ROUNDING: f64 = 1e-12;
+/// V10: least speed of the far ball, relative to v0 (digest 95 %).
+const CHAIN_FAR_MIN: f64 = 0.95;
+/// V13: "at rest" means slower than this fraction of the drop's impact speed (digest 1e-2).
+const REST_REL: f64 = 1e-2;
+
+/// The scene cases.
+pub fn cases() -> Vec<Case> {
+    vec![
+        Case {
+            name: "V6-block-on-ramp",
+            description: "block launched down a 30° ramp (548 cm/s, μ 0.9): stop at 1.9992 s and 547.77 cm (±2 %), creep < 1 %",
+            run: v6_block_on_ramp,
+        },
+        Case {
+            name: "V7-sliding-to-rolling",
+            description: "ball launched without spin: rolling from t* = 2v0/(7μg), s* = 12v0²/(49μg), v* = 5v0/7 (±2 %)",
+            run: v7_sliding_to_rolling,
+        },
+        Case {
+            name: "V9-two-ball",
+            description: "central frictionless collision of equal balls: v0(1 − e)/2 and v0(1 + e)/2 (1e-6)",
+            run: v9_two_ball,
+        },
+        Case {
+            name: "V10-chain-of-balls",
+            description: "striker into four balls ε_c apart, e = 1: far ball ≥ 0.95 v0, others and striker < 0.05 v0, no recoil",
+            run: v10_chain,
+        },
+        Case {
+            name: "V13-block-drop",
+            description: "two blocks dropped on a floor end stacked and at rest (< 1 % of impact speed) with no interpenetration",
+            run: v13_block_drop,
+        },
+        Case {
+            name: "V15-tumbling-box-elastic",
+            description: "26 tumbling convex bodies in a closed box, g = 0, e = 1, μ = 0: kinetic energy conserved to 1e-6, no interpenetration",
+            run: v15_elastic,
+        },
+        Case {
+            name: "V15-tumbling-box",
+            description: "26 tumbling convex bodies in a closed box, g = 0, e = 0.8, μ = 0.3: kinetic energy never rises, no interpenetration",
+            run: v15_dissipative,
+        },
+        Case {
+            name: "bullet-through-plate",
+            description: "1 km/s bodies spinning at 1000 rad/s at a 1 mm plate: they bounce or deflect, never pass through",
+            run: bullet,
+        },
+        Case {
+            name: "determinism-threads",
+            description: "tumbling box run on 1 and on 2 threads: bit-identical trajectories (hash)",
+            run: determinism,
+        },
+    ]
+}
+
+/// `fixtures/scenes/<name>.ron` from the workspace root.
+fn scene_path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("fixtures")
+        .join("scenes")
+        .join(format!("{name}.ron"))
+}
+
+fn load(name: &str) -> Result<(Scene, World), String> {
+    let scene = Scene::read(&scene_path(name)).map_err(|e| e.to_string())?;
+    let world = World::from_scene(&scene).map_err(|e| e.to_string())?;
+    Ok((scene, world))
+}
+
+/// Runs a bundled scene for its duration at its output rate.
+fn record(name: &str) -> Result<(World, Recording), String> {
+    let (scene, mut world) = load(name)?;
+    let rec = run(
+        &mut world,
+        scene.desc.duration,
+        scene.desc.output_rate,
+        |_| {},
+    )
+    .map_err(|e| e.to_string())?;
+    Ok((world, rec))
+}
+
+fn body(world: &World, name: &str) -> Result<usize, String> {
+    world
+        .body_index(name)
+        .ok_or_else(|| format!("no body \"{name}\""))
+}
+
+/// "Never closer than zero": the smallest distance at any check, which must be positive.
+fn no_penetration(rec: &Recording) -> Metric {
+    Metric::new(
+        "min_distance_positive",
+        f64::from(u8::from(
+            rec.counters.min_distance > 0.0 && rec.counters.touching_checks == 0,
+        )),
+        1.0,
+        Check::Exact,
+    )
+}
+
+/// Least-squares line `y = a + b·x`.
+fn fit_line(points: &[(f64, f64)]) -> (f64, f64) {
+    let n = points.len() as f64;
+    let (sx, sy) = points
+        .iter()
+        .fold((0.0, 0.0), |(sx, sy), (x, y)| (sx + x, sy + y));
+    let (mx, my) = (sx / n, sy / n);
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), (x, y)| {
+        (a + (x - mx) * (y - my), b + (x - mx) * (x - mx))
+    });
+    let slope = sxy / sxx;
+    (my - slope * mx, slope)
+}
+
+fn v6_block_on_ramp() -> Result<Vec<Metric>, String> {
+    let (world, rec) = record("block-on-ramp")?;
+    let b = body(&world, "block")?;
+    let (g, mu, v0) = (981.0f64, 0.9f64, 548.0f64);
+    let th = 30f64.to_radians();
+    let a = g * (mu * th.cos() - th.sin());
+    let (t_ref, d_ref) = (v0 / a, v0 * v0 / (2.0 * a));
+    let down = DVec3::new(th.cos(), 0.0, -th.sin());
+    let x0 = rec.frames[0].bodies[b].position;
+    let s = |k: usize| (rec.frames[k].bodies[b].position - x0).dot(down);
+    // Velocity along the ramp by central differences over the sliding phase (0.2 s–1.6 s),
+    // fitted by a line v = v0' − a'·t: its zero is the stop time, its area the distance.
+    let pts: Vec<(f64, f64)> = (1..rec.frames.len() - 1)
+        .filter(|&k| (0.2..=1.6).contains(&rec.frames[k].time))
+        .map(|k| {
+            let dt = rec.frames[k + 1].time - rec.frames[k - 1].time;
+            (rec.frames[k].time, (s(k + 1) - s(k - 1)) / dt)
+        })
+        .collect();
+    let (v_fit, slope) = fit_line(&pts);
+    let t_stop = -v_fit / slope;
+    let d_stop = -v_fit * v_fit / (2.0 * slope);
+    let at = |t: f64| {
+        rec.frames
+            .iter()
+            .position(|f| f.time >= t - 1e-9)
+            .unwrap_or(rec.frames.len() - 1)
+    };
+    let (k25, kend) = (at(2.5), rec.frames.len() - 1);
+    Ok(vec![
+        Metric::new("deceleration", -slope, a, Check::Rel(SCENE_REL)),
+        Metric::new("stop_time", t_stop, t_ref, Check::Rel(SCENE_REL)),
+        Metric::new("stop_distance_fit", d_stop, d_ref, Check::Rel(SCENE_REL)),
+        Metric::new("distance_at_2.5s", s(k25), d_ref, Check::Rel(SCENE_REL)),
+        Metric::new(
+            "creep_2.5s_to_5s",
+            s(kend) - s(k25),
+            0.0,
+            Check::Between(-0.01 * d_ref, 0.01 * d_ref),
+        ),
+        no_penetration(&rec),
+    ])
+}
+
+fn v7_sliding_to_rolling() -> Result<Vec<Metric>, String> {
+    let (world, rec) = record("sliding-to-rolling")?;
+    let b = body(&world, "ball")?;
+    let (v0, mu, g) = (5.0f64, 0.2f64, 9.81f64);
+    let t_ref = 2.0 * v0 / (7.0 * mu * g);
+    let s_ref = 12.0 * v0 * v0 / (49.0 * mu * g);
+    let v_ref = 5.0 * v0 / 7.0;
+    let x0 = rec.frames[0].bodies[b].position.x;
+    // Sliding: a line through the speeds before 0.8·t*; rolling: the mean after 1.3·t*.
+    let sliding: Vec<(f64, f64)> = rec
+        .frames
+        .iter()
+        .filter(|f| f.time > 0.05 && f.time < 0.8 * t_ref)
+        .map(|f| (f.time, f.bodies[b].velocity.x))
+        .collect();
+    let rolling: Vec<f64> = rec
+        .frames
+        .iter()
+        .filter(|f| f.time > 1.3 * t_ref)
+        .map(|f| f.bodies[b].velocity.x)
+        .collect();
+    let (v_start, slope) = fit_line(&sliding);
+    let v_roll = rolling.iter().sum::<f64>() / rolling.len() as f64;
+    let t_star = (v_roll - v_start) / slope;
+    // Distance at t*: the sliding parabola.
+    let s_star = v_start * t_star + 0.5 * slope * t_star * t_star;
+    let last = rec.frames.last().ok_or("no frames")?;
+    let spin = last.bodies[b].omega.y * 0.1; // ω·r of the rolling ball
+    let travelled = last.bodies[b].position.x - x0;
+    Ok(vec![
+        Metric::new("v_star", v_roll, v_ref, Check::Rel(SCENE_REL)),
+        Metric::new("t_star", t_star, t_ref, Check::Rel(SCENE_REL)),
+        Metric::new("s_star", s_star, s_ref, Check::Rel(SCENE_REL)),
+        Metric::new("rolling_omega_r", spin, v_ref, Check::Rel(SCENE_REL)),
+        Metric::new(
+            "distance_at_end",
+            travelled,
+            s_ref + v_ref * (last.time - t_ref),
+            Check::Rel(SCENE_REL),
+        ),
+        no_penetration(&rec),
+    ])
+}
+
+fn v9_two_ball() -> Result<Vec<Metric>, String> {
+    let (world, rec) = record("two-ball-collision")?;
+    let (a, b) = (body(&world, "striker")?, body(&world, "target")?);
+    let (v0, e) = (2.0, 0.6);
+    let last = rec.frames.last().ok_or("no frames")?;
+    Ok(vec![
+        Metric::new(
+            "striker_v",
+            last.bodies[a].velocity.x,
+            v0 * (1.0 - e) / 2.0,
+            Check::Abs(TWO_BALL_REL * v0),
+        ),
+        Metric::new(
+            "target_v",
+            last.bodies[b].velocity.x,
+            v0 * (1.0 + e) / 2.0,
+            Check::Abs(TWO_BALL_REL * v0),
+        ),
+        Metric::new(
+            "collisions",
+            rec.counters.collisions as f64,
+            1.0,
+            Check::Exact,
+        ),
+    ])
+}
+
+fn v10_chain() -> Result<Vec<Metric>, String> {
+    let (world, rec) = record("chain-of-balls")?;
+    let v0 = 2.0;
+    let last = rec.frames.last().ok_or("no frames")?;
+    let v = |name: &str| -> Result<DVec3, String> { Ok(last.bodies[body(&world, name)?].velocity) };
+    let mut m = vec![
+        Metric::new(
+            "far_ball_speed_over_v0",
+            v("ball4")?.x / v0,
+            1.0,
+            Check::Between(CHAIN_FAR_MIN, 1.0 + 1e-9),
+        ),
+        Metric::new(
+            "striker_vx_over_v0",
+            v("striker")?.x / v0,
+            0.0,
+            Check::Between(-CHAIN_ROUNDING, CHAIN_STILL_REL),
+        ),
+    ];
+    for name in ["ball1", "ball2", "ball3"] {
+        m.push(Metric::new(
+            format!("{name}_speed_over_v0"),
+            v(name)?.length() / v0,
+            0.0,
+            Check::Between(0.0, CHAIN_STILL_REL),
+        ));
+    }
+    m.push(no_penetration(&rec));
+    Ok(m)
+}
+
+fn v13_block_drop() -> Result<Vec<Metric>, String> {
+    let (world, rec) = record("block-drop")?;
+    let (lo, up) = (body(&world, "lower")?, body(&world, "upper")?);
+    let last = rec.frames.last().ok_or("no frames")?;
+    // The upper block falls ~0.26 m before it first hits: impact speed √(2·g·h).
+    let v_impact = (2.0f64 * 9.81 * 0.26).sqrt();
+    let (bl, bu) = (last.bodies[lo], last.bodies[up]);
+    Ok(vec![
+        Metric::new(
+            "lower_speed_rel",
+            bl.velocity.length() / v_impact,
+            0.0,
+            Check::Between(0.0, REST_REL),
+        ),
+        Metric::new(
+            "upper_speed_rel",
+            bu.velocity.length() / v_impact,
+            0.0,
+            Check::Between(0.0, REST_REL),
+        ),
+        Metric::new(
+            "upper_on_lower",
+            f64::from(u8::from(bu.position.z > bl.position.z + 0.05)),
+            1.0,
+            Check::Exact,
+        ),
+        no_penetration(&rec),
+    ])
+}
+
+fn v15_elastic() -> Result<Vec<Metric>, String> {
+    let (_, rec) = record("tumbling-box-elastic")?;
+    let e0 = rec.frames[0].kinetic_energy;
+    let worst = rec
+        .frames
+        .iter()
+        .map(|f| (f.kinetic_energy - e0).abs() / e0)
+        .fold(0.0, f64::max);
+    Ok(vec![
+        Metric::new(
+            "max_energy_change_rel",
+            worst,
+            0.0,
+            Check::Between(0.0, ELASTIC_ENERGY_REL),
+        ),
+        Metric::new(
+            "collisions_positive",
+            f64::from(u8::from(rec.counters.collisions > 100)),
+            1.0,
+            Check::Exact,
+        ),
+        no_penetration(&rec),
+    ])
+}
+
+fn v15_dissipative() -> Result<Vec<Metric>, String> {
+    let (_, rec) = record("tumbling-box")?;
+    let e0 = rec.frames[0].kinetic_energy;
+    let rise = rec
+        .frames
+        .windows(2)
+        .map(|w| (w[1].kinetic_energy - w[0].kinetic_energy) / e0)
+        .fold(0.0, f64::max);
+    let last = rec.frames.last().ok_or("no frames")?;
+    Ok(vec![
+        Metric::new(
+            "max_energy_rise_rel",
+            rise,
+            0.0,
+            Check::Between(0.0, MONOTONE_ENERGY_REL),
+        ),
+        Metric::new(
+            "energy_dissipated",
+            f64::from(u8::from(last.kinetic_energy < 0.9 * e0)),
+            1.0,
+            Check::Exact,
+        ),
+        no_penetration(&rec),
+    ])
+}
+
+fn bullet() -> Result<Vec<Metric>, String> {
+    let (world, rec) = record("bullet-through-plate")?;
+    let last = rec.frames.last().ok_or("no frames")?;
+    let half_thickness = 0.0005;
+    let (b1, b2) = (body(&world, "bullet")?, body(&world, "rim-bullet")?);
+    // The aimed bullet must come back: still on the near side, moving away.
+    let back = last.bodies[b1].position.x < -half_thickness && last.bodies[b1].velocity.x < 0.0;
+    Ok(vec![
+        Metric::new(
+            "bullet_bounced",
+            f64::from(u8::from(back)),
+            1.0,
+            Check::Exact,
+        ),
+        Metric::new(
+            "rim_bullet_deflected",
+            f64::from(u8::from(last.bodies[b2].velocity.x < 999.0)),
+            1.0,
+            Check::Exact,
+        ),
+        no_penetration(&rec),
+    ])
+}
+
+fn determinism() -> Result<Vec<Metric>, String> {
+    let mut hashes = Vec::new();
+    for threads in [1, 2] {
+        let (scene, mut world) = load("tumbling-box-elastic")?;
+        world.set_threads(threads).map_err(|e| e.to_string())?;
+        let rec =
+            run(&mut world, 0.5, scene.desc.output_rate, |_| {}).map_err(|e| e.to_string())?;
+        hashes.push(rec.hash());
+    }
+    Ok(vec![Metric::new(
+        "hash_1_thread_equals_2_threads",
+        f64::from(u8::from(hashes[0] == hashes[1])),
+        1.0,
+        Check::Exact,
+    )])
+}
