@@ -28,3 +28,5 @@ pub use world::{BodyState, Counters, World};
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod hostile;

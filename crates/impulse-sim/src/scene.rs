@@ -60,6 +60,15 @@ pub struct SceneDesc {
     pub bodies: Vec<BodyDesc>,
 }
 
+/// Most frames a run may record (`duration × output_rate`): beyond this the recording alone
+/// would need gigabytes. Default `10_000_000`.
+pub const MAX_FRAMES: f64 = 1e7;
+
+/// Smallest collision epsilon relative to the largest body extent in the scene. Distances are
+/// computed to about 1e-15 of the body size; an ε_c within a few orders of that makes every
+/// contact a rounding question and the event loop crawl. Default `1e-9`.
+pub const MIN_EPSILON_REL: f64 = 1e-9;
+
 fn default_gravity() -> [f64; 3] {
     [0.0, 0.0, -9.81]
 }
@@ -329,6 +338,15 @@ impl SceneDesc {
         positive(self.duration).map_err(|p| scene("duration", p))?;
         positive(self.collision_epsilon).map_err(|p| scene("collision_epsilon", p))?;
         positive(self.output_rate).map_err(|p| scene("output_rate", p))?;
+        if self.output_rate * self.duration > MAX_FRAMES {
+            return Err(scene(
+                "output_rate",
+                format!(
+                    "{} frames/s over {} s is more than {MAX_FRAMES:e} frames",
+                    self.output_rate, self.duration
+                ),
+            ));
+        }
         positive(self.accuracy.rotation_tolerance)
             .map_err(|p| scene("accuracy.rotation_tolerance", p))?;
         positive(self.accuracy.collision_tolerance)
@@ -417,6 +435,21 @@ impl SceneDesc {
                         .into(),
                 ));
             }
+        }
+        let extent = self
+            .bodies
+            .iter()
+            .map(|b| shape_extent(&b.shape))
+            .fold(0.0, f64::max);
+        if self.collision_epsilon < MIN_EPSILON_REL * extent {
+            return Err(scene(
+                "collision_epsilon",
+                format!(
+                    "{:e} is below {MIN_EPSILON_REL:e} × the largest body size {extent:e}: \
+                     distances are not that accurate (use 1e-3 to 1e-2 of the body sizes)",
+                    self.collision_epsilon
+                ),
+            ));
         }
         if !self.bodies.iter().any(|b| b.motion == MotionDesc::Dynamic) {
             return Err(scene(
@@ -511,6 +544,30 @@ fn check_rotation(r: &RotationDesc) -> Result<(), String> {
                 Err(format!("quaternion {q:?} is not finite and non-zero"))
             }
         }
+    }
+}
+
+/// A rough size of a (validated) shape: its largest half extent, radius or coordinate. Used
+/// only to judge ε_c; an OBJ file counts as 0 (not read here).
+fn shape_extent(s: &ShapeDesc) -> f64 {
+    match s {
+        ShapeDesc::Sphere { radius } | ShapeDesc::GeodesicSphere { radius, .. } => *radius,
+        ShapeDesc::Box { half_extents } => half_extents.iter().copied().fold(0.0, f64::max),
+        ShapeDesc::Prism {
+            radius,
+            half_height,
+            ..
+        } => radius.max(*half_height),
+        ShapeDesc::Hull { points } => points
+            .iter()
+            .flatten()
+            .map(|x| x.abs())
+            .fold(0.0, f64::max),
+        ShapeDesc::Obj { .. } => 0.0,
+        ShapeDesc::Compound { parts } => parts
+            .iter()
+            .map(|p| shape_extent(&p.shape) + p.position.iter().map(|x| x.abs()).fold(0.0, f64::max))
+            .fold(0.0, f64::max),
     }
 }
 
