@@ -5,7 +5,7 @@
 //! names are unique and stable (ASCII letters, digits, `-`, `_`, `.`).
 
 mod massprops;
-mod scenes;
+pub mod scenes;
 
 use crate::validate::case::Case;
 
