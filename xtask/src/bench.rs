@@ -183,6 +183,7 @@ fn bench_one(check: &SceneCheck, setting: &Setting) -> Result<Row> {
     scene.desc.accuracy.rotation_tolerance = setting.rotation_tolerance;
     scene.desc.accuracy.collision_tolerance = setting.collision_tolerance;
     let mut world = World::from_scene(&scene).map_err(|e| format!("{}: {e}", check.case))?;
+    world.set_event_log(check.event_log);
     let start = Instant::now();
     let rec: Recording = run(
         &mut world,

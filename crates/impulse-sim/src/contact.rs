@@ -71,7 +71,8 @@ fn response_body(b: &Body) -> impulse_response::Body {
 
 /// Resolves a contact between `b1` and `b2` at world point `x` with unit normal `n` (from b2
 /// toward b1), current distance `distance` (< ε_c). Applies the impulses and returns what kind
-/// of contact it was, or `None` when the bodies are not approaching.
+/// of contact it was with the impulse on `b1` (world), or `None` when the bodies are not
+/// approaching.
 ///
 /// # Errors
 /// The response's error message when the collision cannot be resolved.
@@ -86,7 +87,7 @@ pub(crate) fn resolve(
     gravity: f64,
     mat: Material,
     model: &ContactModel,
-) -> Result<Option<ContactKind>, String> {
+) -> Result<Option<(ContactKind, DVec3)>, String> {
     let frame = ContactFrame::from_normal(n).map_err(|e| e.to_string())?;
     let u_world = b1.point_velocity(x) - b2.point_velocity(x);
     let u0 = frame.to_contact(u_world);
@@ -139,9 +140,10 @@ pub(crate) fn resolve(
     b1.apply_impulse(p, x);
     b2.apply_impulse(-p, x);
     let micro = gravity > 0.0 && -u0.z < (2.0 * gravity * eps_c).sqrt();
-    Ok(Some(match response.kind {
+    let kind = match response.kind {
         ResponseKind::Reversing => ContactKind::Reversing,
         _ if micro => ContactKind::Microcollision,
         _ => ContactKind::Collision,
-    }))
+    };
+    Ok(Some((kind, p)))
 }

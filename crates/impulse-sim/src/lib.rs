@@ -24,9 +24,9 @@ pub mod world;
 pub use error::SimError;
 pub use record::{Frame, Recording, run};
 pub use scene::{Scene, SceneDesc};
-pub use world::{BodyState, Counters, World};
+pub use world::{BodyState, ContactEvent, Counters, World};
 
 #[cfg(test)]
-mod tests;
-#[cfg(test)]
 mod hostile;
+#[cfg(test)]
+mod tests;

@@ -15,6 +15,8 @@ pub struct Frame {
     pub kinetic_energy: f64,
     /// Total potential energy (zero at the world origin).
     pub potential_energy: f64,
+    /// Event counters so far.
+    pub counters: Counters,
 }
 
 impl Frame {
@@ -26,6 +28,7 @@ impl Frame {
             bodies: world.states(),
             kinetic_energy: world.kinetic_energy(),
             potential_energy: world.potential_energy(),
+            counters: world.counters(),
         }
     }
 }

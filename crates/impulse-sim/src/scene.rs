@@ -558,15 +558,13 @@ fn shape_extent(s: &ShapeDesc) -> f64 {
             half_height,
             ..
         } => radius.max(*half_height),
-        ShapeDesc::Hull { points } => points
-            .iter()
-            .flatten()
-            .map(|x| x.abs())
-            .fold(0.0, f64::max),
+        ShapeDesc::Hull { points } => points.iter().flatten().map(|x| x.abs()).fold(0.0, f64::max),
         ShapeDesc::Obj { .. } => 0.0,
         ShapeDesc::Compound { parts } => parts
             .iter()
-            .map(|p| shape_extent(&p.shape) + p.position.iter().map(|x| x.abs()).fold(0.0, f64::max))
+            .map(|p| {
+                shape_extent(&p.shape) + p.position.iter().map(|x| x.abs()).fold(0.0, f64::max)
+            })
             .fold(0.0, f64::max),
     }
 }

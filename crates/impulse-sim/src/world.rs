@@ -17,9 +17,10 @@
 //! **Time-of-impact targets.** A pair farther apart than ε_c is scheduled for the time it
 //! could first come within ε_c/2 ([`TOI_TARGET_FRACTION`]), so checks happen at a positive gap
 //! and bodies never interpenetrate. A pair already within ε_c but not approaching is scheduled
-//! for when it could have closed half its gap; the gap used is never below
-//! [`GAP_FLOOR_FRACTION`]·ε_c, so the run cannot stall on a pair that touches (the price: a
-//! penetration of at most that much, which the counters report).
+//! for when it could have closed half its gap. Right after a pair is checked at the top of the
+//! heap, the gap used is never below [`GAP_FLOOR_FRACTION`]·ε_c, so the run cannot stall on a
+//! pair that touches (the price: a penetration of about that much, which the counters
+//! measure); everywhere else the bound stays conservative.
 
 use glam::DVec3;
 use impulse_broadphase::{BroadphaseError, CoherentHash, DEFAULT_ALPHA, DEFAULT_BETA, Levels};
@@ -74,8 +75,37 @@ pub struct Counters {
     pub heap_operations: u64,
     /// Checks that found the bodies touching or penetrating (distance 0).
     pub touching_checks: u64,
-    /// Smallest distance seen at any check (length; negative is not measured: touching is 0).
+    /// Smallest distance seen at any check (length; 0 when touching or penetrating).
     pub min_distance: f64,
+    /// Largest penetration depth measured at a check that found the bodies touching or
+    /// overlapping (length; an upper bound for sphere–polyhedron pieces). The promise is that
+    /// it never exceeds ε_c.
+    pub max_penetration: f64,
+}
+
+/// One resolved contact, as recorded by the event log ([`World::set_event_log`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactEvent {
+    /// Simulated time.
+    pub time: f64,
+    /// The two bodies (indices into [`World::bodies`]); the impulse acts on `a`, −impulse on `b`.
+    pub a: usize,
+    /// Second body.
+    pub b: usize,
+    /// What kind of contact it was.
+    pub kind: ContactKind,
+    /// The impulse on body `a` (world).
+    pub impulse: DVec3,
+    /// The contact point (world).
+    pub point: DVec3,
+    /// Kinetic energy of the two bodies before the impulse.
+    pub energy_before: f64,
+    /// Kinetic energy of the two bodies after the impulse.
+    pub energy_after: f64,
+    /// Linear momentum of the two bodies before the impulse.
+    pub momentum_before: DVec3,
+    /// Linear momentum of the two bodies after the impulse.
+    pub momentum_after: DVec3,
 }
 
 /// Per-pair state kept between checks.
@@ -103,6 +133,7 @@ pub struct World {
     counters: Counters,
     stalled_checks: u64,
     pool: Option<rayon::ThreadPool>,
+    events: Option<Vec<ContactEvent>>,
 }
 
 /// The state of one body at one time.
@@ -229,6 +260,7 @@ impl World {
             },
             stalled_checks: 0,
             pool: None,
+            events: None,
         };
         world.check_initial_overlaps()?;
         for i in 0..world.bodies.len() {
@@ -254,6 +286,17 @@ impl World {
             .map_err(|e| self.runtime(format!("thread pool: {e}")))?;
         self.pool = Some(pool);
         Ok(())
+    }
+
+    /// Starts (or stops) recording every resolved contact in an event log.
+    pub fn set_event_log(&mut self, on: bool) {
+        self.events = if on { Some(Vec::new()) } else { None };
+    }
+
+    /// The event log (empty unless [`World::set_event_log`] turned it on).
+    #[must_use]
+    pub fn events(&self) -> &[ContactEvent] {
+        self.events.as_deref().unwrap_or(&[])
     }
 
     /// Current simulated time.
@@ -494,27 +537,36 @@ impl World {
         }
         if d <= 0.0 {
             self.counters.touching_checks += 1;
+            let depth = penetration_depth(ba, bb);
+            self.counters.max_penetration = self.counters.max_penetration.max(depth);
         }
         self.counters.min_distance = self.counters.min_distance.min(d);
         (d, cl.point_a, cl.point_b, state.normal)
     }
 
-    /// A check plus a time-of-impact bound (absolute time); no response.
+    /// A check plus a conservative time-of-impact bound (absolute time); no response. Used
+    /// for pairs that are not at the top of the heap (new pairs, re-keyed pairs).
     fn bound(&mut self, pair: (u32, u32)) -> f64 {
         let (d, _, _, normal) = self.query(pair);
-        self.key_for(pair, d, normal)
+        self.key_for(pair, d, normal, false)
     }
 
-    fn key_for(&self, (a, b): (u32, u32), d: f64, normal: Option<DVec3>) -> f64 {
+    /// The key of a pair at distance `d`: when it could first close the gap to the target
+    /// (module documentation). Only a pair just checked at the top of the heap (`at_top`)
+    /// gets the gap floor, which guarantees progress; elsewhere the bound stays
+    /// conservative, so a pair re-keyed while touching comes back to the top at once.
+    fn key_for(&self, (a, b): (u32, u32), d: f64, normal: Option<DVec3>, at_top: bool) -> f64 {
         let Some(n) = normal else {
             return self.time; // touching with no known normal: check again now.
         };
-        let gap = if d > self.eps_c {
+        let mut gap = if d > self.eps_c {
             d - TOI_TARGET_FRACTION * self.eps_c
         } else {
             0.5 * d
+        };
+        if at_top {
+            gap = gap.max(GAP_FLOOR_FRACTION * self.eps_c);
         }
-        .max(GAP_FLOOR_FRACTION * self.eps_c);
         let (ba, bb) = (&self.bodies[a as usize], &self.bodies[b as usize]);
         // d̂ points from body a toward body b: the opposite of the normal.
         let tau = toi::toi_lower_bound(
@@ -544,6 +596,10 @@ impl World {
             let (i, j) = (pair.0 as usize, pair.1 as usize);
             let mat = self.material(i, j);
             let (bi, bj) = two_mut(&mut self.bodies, i, j);
+            let before = (
+                bi.kinetic_energy() + bj.kinetic_energy(),
+                bi.linear_momentum() + bj.linear_momentum(),
+            );
             let outcome = contact::resolve(
                 bi,
                 bj,
@@ -562,8 +618,23 @@ impl World {
                     self.bodies[i].name, self.bodies[j].name
                 ),
             })?;
-            if let Some(kind) = outcome {
+            if let Some((kind, impulse)) = outcome {
                 hit = true;
+                if let Some(log) = &mut self.events {
+                    let (bi, bj) = (&self.bodies[i], &self.bodies[j]);
+                    log.push(ContactEvent {
+                        time: self.time,
+                        a: i,
+                        b: j,
+                        kind,
+                        impulse,
+                        point: x,
+                        energy_before: before.0,
+                        energy_after: bi.kinetic_energy() + bj.kinetic_energy(),
+                        momentum_before: before.1,
+                        momentum_after: bi.linear_momentum() + bj.linear_momentum(),
+                    });
+                }
                 match kind {
                     ContactKind::Collision => self.counters.collisions += 1,
                     ContactKind::Microcollision => self.counters.microcollisions += 1,
@@ -575,11 +646,13 @@ impl World {
             }
         }
         if hit {
-            // Every other heap pair of the two bodies is stale (thesis §2.4.3).
-            let mut others: Vec<(u32, u32)> = self
-                .heap
-                .pairs_of(pair.0)
-                .chain(self.heap.pairs_of(pair.1))
+            // Every other heap pair of the two bodies is stale (thesis §2.4.3) — of the bodies
+            // whose motion the impulse changed: a fixed or scripted body's pairs stay valid.
+            let moved = |b: u32| self.bodies[b as usize].is_dynamic();
+            let mut others: Vec<(u32, u32)> = [pair.0, pair.1]
+                .into_iter()
+                .filter(|&b| moved(b))
+                .flat_map(|b| self.heap.pairs_of(b))
                 .filter(|p| *p != pair)
                 .collect();
             others.sort_unstable();
@@ -592,9 +665,10 @@ impl World {
             }
         }
         let key = if hit {
-            self.bound(pair)
+            let (d, _, _, normal) = self.query(pair);
+            self.key_for(pair, d, normal, true)
         } else {
-            self.key_for(pair, d, normal)
+            self.key_for(pair, d, normal, true)
         };
         let still_close = self.hash.is_close(pair.0, pair.1).unwrap_or(false);
         self.heap
@@ -644,6 +718,52 @@ impl World {
         }
         Ok(())
     }
+}
+
+/// How deep two bodies that touch or overlap interpenetrate: the largest over their piece
+/// pairs of the separating-axis depth (polyhedra, exact), `r1 + r2 − |c1 − c2|` (spheres,
+/// exact), or `r − (largest face-plane distance of the centre)` (sphere and polyhedron, an
+/// upper bound). Zero when no piece pair overlaps.
+fn penetration_depth(a: &Body, b: &Body) -> f64 {
+    use impulse_collide::Convex;
+    let mut depth = 0.0f64;
+    for pa in a.shape.pieces() {
+        let pose_a = a.pose * pa.pose;
+        for pb in b.shape.pieces() {
+            let pose_b = b.pose * pb.pose;
+            let d = match (&pa.convex, &pb.convex) {
+                (Convex::Polyhedron(x), Convex::Polyhedron(y)) => {
+                    -impulse_collide::brute::sat_separation(x, &pose_a, y, &pose_b)
+                }
+                (Convex::Sphere(x), Convex::Sphere(y)) => {
+                    x.radius() + y.radius() - pose_a.translation.distance(pose_b.translation)
+                }
+                (Convex::Sphere(x), Convex::Polyhedron(y)) => {
+                    sphere_depth(x.radius(), pose_a.translation, y, &pose_b)
+                }
+                (Convex::Polyhedron(y), Convex::Sphere(x)) => {
+                    sphere_depth(x.radius(), pose_b.translation, y, &pose_a)
+                }
+            };
+            depth = depth.max(d);
+        }
+    }
+    depth
+}
+
+fn sphere_depth(
+    r: f64,
+    centre: DVec3,
+    poly: &impulse_geom::ConvexPolyhedron,
+    pose: &impulse_geom::Pose,
+) -> f64 {
+    let c = pose.inverse_transform_point(centre);
+    let outside = poly
+        .planes()
+        .iter()
+        .map(|p| p.signed_distance(c))
+        .fold(f64::NEG_INFINITY, f64::max);
+    r - outside
 }
 
 /// Two distinct elements of a slice, mutably.

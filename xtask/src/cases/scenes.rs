@@ -15,6 +15,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
+use impulse_sim::contact::ContactKind;
 use impulse_sim::{Recording, Scene, World, run};
 
 use crate::validate::case::{Case, Check, Metric};
@@ -29,6 +30,12 @@ const ORBIT_RATE_REL: f64 = 0.03;
 const ORBIT_RADIUS_DRIFT: f64 = 0.05;
 /// V9: post-impact velocities, relative (digest: 1e-6).
 const TWO_BALL_REL: f64 = 1e-6;
+/// V14: momentum conservation of a ball–ball collision, relative to the pair's momentum.
+const POOL_MOMENTUM_REL: f64 = 1e-9;
+/// V14: largest energy gain of a ball–ball collision, relative (none allowed beyond rounding).
+const POOL_ENERGY_REL: f64 = 1e-12;
+/// V16: a domino has toppled when its long axis leans more than this from the vertical.
+const TOPPLE_DEGREES: f64 = 45.0;
 /// V15 elastic: kinetic energy conservation, relative (digest: 1e-6).
 const ELASTIC_ENERGY_REL: f64 = 1e-6;
 /// V15 dissipative: the largest rise of kinetic energy between frames, relative (digest:
@@ -60,6 +67,8 @@ pub struct SceneCheck {
     pub scene: &'static str,
     /// The Table 7.1 row (example name, slowdown on the 1996 machine) this scene reproduces.
     pub thesis: Option<(&'static str, f64)>,
+    /// Whether the run records every contact (`World::set_event_log`) for the metrics.
+    pub event_log: bool,
     /// The metrics of a finished run, each against its reference.
     pub metrics: fn(&World, &Recording) -> Result<Vec<Metric>, String>,
 }
@@ -68,56 +77,79 @@ pub struct SceneCheck {
 pub fn scene_checks() -> Vec<SceneCheck> {
     vec![
         SceneCheck {
+            case: "V14-pool-break",
+            scene: "pool-break",
+            event_log: true,
+            thesis: Some(("pool break", 9.0)),
+            metrics: v14_pool,
+        },
+        SceneCheck {
+            case: "V16-dominos",
+            scene: "dominos",
+            event_log: false,
+            thesis: Some(("dominos", 3.1)),
+            metrics: v16_dominos,
+        },
+        SceneCheck {
             case: "V6-block-on-ramp",
             scene: "block-on-ramp",
+            event_log: false,
             thesis: Some(("block on ramp", 0.3)),
             metrics: v6_block_on_ramp,
         },
         SceneCheck {
             case: "V7-sliding-to-rolling",
             scene: "sliding-to-rolling",
+            event_log: false,
             thesis: None,
             metrics: v7_sliding_to_rolling,
         },
         SceneCheck {
             case: "V8-ball-on-platter",
             scene: "ball-on-platter",
+            event_log: false,
             thesis: Some(("ball on spinning platter", 1.4)),
             metrics: v8_platter,
         },
         SceneCheck {
             case: "V9-two-ball",
             scene: "two-ball-collision",
+            event_log: false,
             thesis: None,
             metrics: v9_two_ball,
         },
         SceneCheck {
             case: "V10-chain-of-balls",
             scene: "chain-of-balls",
+            event_log: false,
             thesis: Some(("chain of balls", 1.2)),
             metrics: v10_chain,
         },
         SceneCheck {
             case: "V13-block-drop",
             scene: "block-drop",
+            event_log: false,
             thesis: Some(("block drop", 0.5)),
             metrics: v13_block_drop,
         },
         SceneCheck {
             case: "V15-tumbling-box-elastic",
             scene: "tumbling-box-elastic",
+            event_log: false,
             thesis: Some(("exploding text", 4.5)),
             metrics: v15_elastic,
         },
         SceneCheck {
             case: "V15-tumbling-box",
             scene: "tumbling-box",
+            event_log: false,
             thesis: Some(("exploding text", 4.5)),
             metrics: v15_dissipative,
         },
         SceneCheck {
             case: "bullet-through-plate",
             scene: "bullet-through-plate",
+            event_log: false,
             thesis: None,
             metrics: bullet,
         },
@@ -130,7 +162,7 @@ fn run_check(case: &str) -> Result<Vec<Metric>, String> {
         .into_iter()
         .find(|c| c.case == case)
         .ok_or_else(|| format!("no scene check {case}"))?;
-    let (world, rec) = record(check.scene)?;
+    let (world, rec) = record(check.scene, check.event_log)?;
     (check.metrics)(&world, &rec)
 }
 
@@ -183,6 +215,16 @@ pub fn cases() -> Vec<Case> {
             run: || run_check("bullet-through-plate"),
         },
         Case {
+            name: "V14-pool-break",
+            description: "15-ball rack ε_c apart broken by a cue ball with draw: every ball–ball collision conserves the pair's momentum (1e-9) and loses energy",
+            run: || run_check("V14-pool-break"),
+        },
+        Case {
+            name: "V16-dominos",
+            description: "seven dominos: topple in order along the row, all down and at rest at the end, no interpenetration",
+            run: || run_check("V16-dominos"),
+        },
+        Case {
             name: "determinism-threads",
             description: "tumbling box run on 1 and on 2 threads: bit-identical trajectories (hash)",
             run: determinism,
@@ -206,8 +248,9 @@ pub fn load(name: &str) -> Result<(Scene, World), String> {
 }
 
 /// Runs a bundled scene for its duration at its output rate.
-pub fn record(name: &str) -> Result<(World, Recording), String> {
+pub fn record(name: &str, event_log: bool) -> Result<(World, Recording), String> {
     let (scene, mut world) = load(name)?;
+    world.set_event_log(event_log);
     let rec = run(
         &mut world,
         scene.desc.duration,
@@ -224,15 +267,14 @@ fn body(world: &World, name: &str) -> Result<usize, String> {
         .ok_or_else(|| format!("no body \"{name}\""))
 }
 
-/// "Never closer than zero": the smallest distance at any check, which must be positive.
-fn no_penetration(rec: &Recording) -> Metric {
+/// The promise of chapter 2: bodies never interpenetrate by more than ε_c. The metric is the
+/// largest penetration depth measured at any check, in units of ε_c.
+fn no_penetration(world: &World, rec: &Recording) -> Metric {
     Metric::new(
-        "min_distance_positive",
-        f64::from(u8::from(
-            rec.counters.min_distance > 0.0 && rec.counters.touching_checks == 0,
-        )),
-        1.0,
-        Check::Exact,
+        "max_penetration_over_eps_c",
+        rec.counters.max_penetration / world.collision_epsilon(),
+        0.0,
+        Check::Between(0.0, 1.0),
     )
 }
 
@@ -289,7 +331,7 @@ fn v6_block_on_ramp(world: &World, rec: &Recording) -> Result<Vec<Metric>, Strin
             0.0,
             Check::Between(-CREEP_REL, CREEP_REL),
         ),
-        no_penetration(&rec),
+        no_penetration(&world, &rec),
     ])
 }
 
@@ -332,7 +374,7 @@ fn v7_sliding_to_rolling(world: &World, rec: &Recording) -> Result<Vec<Metric>, 
             s_ref + v_ref * (last.time - t_ref),
             Check::Rel(SCENE_REL),
         ),
-        no_penetration(&rec),
+        no_penetration(&world, &rec),
     ])
 }
 
@@ -396,7 +438,7 @@ fn v8_platter(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             Check::Between(0.0, ORBIT_RADIUS_DRIFT),
         ),
         Metric::new("orbit_radius", r, 0.1, Check::Rel(ORBIT_RADIUS_DRIFT)),
-        no_penetration(&rec),
+        no_penetration(&world, &rec),
     ])
 }
 
@@ -452,7 +494,7 @@ fn v10_chain(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             Check::Between(0.0, CHAIN_STILL_REL),
         ));
     }
-    m.push(no_penetration(&rec));
+    m.push(no_penetration(&world, &rec));
     Ok(m)
 }
 
@@ -509,11 +551,11 @@ fn v13_block_drop(world: &World, rec: &Recording) -> Result<Vec<Metric>, String>
             1.0,
             Check::Exact,
         ),
-        no_penetration(&rec),
+        no_penetration(&world, &rec),
     ])
 }
 
-fn v15_elastic(_world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
+fn v15_elastic(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
     let e0 = rec.frames[0].kinetic_energy;
     let worst = rec
         .frames
@@ -533,11 +575,11 @@ fn v15_elastic(_world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             1.0,
             Check::Exact,
         ),
-        no_penetration(&rec),
+        no_penetration(&world, &rec),
     ])
 }
 
-fn v15_dissipative(_world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
+fn v15_dissipative(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
     let e0 = rec.frames[0].kinetic_energy;
     let rise = rec
         .frames
@@ -558,7 +600,7 @@ fn v15_dissipative(_world: &World, rec: &Recording) -> Result<Vec<Metric>, Strin
             1.0,
             Check::Exact,
         ),
-        no_penetration(&rec),
+        no_penetration(&world, &rec),
     ])
 }
 
@@ -581,7 +623,108 @@ fn bullet(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             1.0,
             Check::Exact,
         ),
-        no_penetration(&rec),
+        no_penetration(&world, &rec),
+    ])
+}
+
+fn v14_pool(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
+    let is_ball =
+        |i: usize| world.bodies()[i].name.starts_with("ball") || world.bodies()[i].name == "cue";
+    let (mut n, mut worst_p, mut worst_e) = (0u32, 0.0f64, f64::NEG_INFINITY);
+    for e in world.events() {
+        if e.kind != ContactKind::Collision || !is_ball(e.a) || !is_ball(e.b) {
+            continue;
+        }
+        n += 1;
+        let scale = e.momentum_before.length().max(e.impulse.length());
+        worst_p = worst_p.max((e.momentum_after - e.momentum_before).length() / scale);
+        worst_e = worst_e.max((e.energy_after - e.energy_before) / e.energy_before);
+    }
+    let last = rec.frames.last().ok_or("no frames")?;
+    let on_table = last
+        .bodies
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| is_ball(*i))
+        .all(|(_, b)| b.position.z > 0.0 && b.position.x.abs() < 1.3 && b.position.y.abs() < 0.65);
+    Ok(vec![
+        Metric::new(
+            "ball_ball_collisions_at_least_15",
+            f64::from(u8::from(n >= 15)),
+            1.0,
+            Check::Exact,
+        ),
+        Metric::new(
+            "max_momentum_error_rel",
+            worst_p,
+            0.0,
+            Check::Between(0.0, POOL_MOMENTUM_REL),
+        ),
+        Metric::new(
+            "max_energy_gain_rel",
+            worst_e,
+            0.0,
+            Check::Between(-1.0, POOL_ENERGY_REL),
+        ),
+        Metric::new(
+            "all_balls_on_table",
+            f64::from(u8::from(on_table)),
+            1.0,
+            Check::Exact,
+        ),
+        no_penetration(world, rec),
+    ])
+}
+
+fn v16_dominos(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
+    let ids: Vec<usize> = (1..=7)
+        .map(|k| body(world, &format!("domino{k}")))
+        .collect::<Result<_, _>>()?;
+    // Tilt: the angle between the domino's long axis (its smallest principal moment, axis 0
+    // of the body frame) and the vertical.
+    let tilt = |f: &impulse_sim::Frame, i: usize| {
+        let axis = f.bodies[i].rotation * DVec3::X;
+        axis.z.abs().clamp(0.0, 1.0).acos()
+    };
+    let fallen = TOPPLE_DEGREES.to_radians();
+    let times: Vec<f64> = ids
+        .iter()
+        .map(|&i| {
+            rec.frames
+                .iter()
+                .find(|f| tilt(f, i) > fallen)
+                .map_or(f64::INFINITY, |f| f.time)
+        })
+        .collect();
+    let in_order = times.windows(2).all(|w| w[0] < w[1]) && times.iter().all(|t| t.is_finite());
+    let last = rec.frames.last().ok_or("no frames")?;
+    let k0 = rec
+        .frames
+        .iter()
+        .position(|f| f.time >= last.time - REST_WINDOW)
+        .ok_or("no frames")?;
+    let first = &rec.frames[k0];
+    let span = last.time - first.time;
+    let v_fall = (2.0f64 * 9.81 * 0.048).sqrt();
+    let mean_speed = ids
+        .iter()
+        .map(|&i| (last.bodies[i].position - first.bodies[i].position).length() / span)
+        .fold(0.0, f64::max);
+    Ok(vec![
+        Metric::new(
+            "topple_in_order",
+            f64::from(u8::from(in_order)),
+            1.0,
+            Check::Exact,
+        ),
+        Metric::new("last_topple_time", times[6], 1.2, Check::Between(0.0, 1.5)),
+        Metric::new(
+            "max_mean_speed_rel",
+            mean_speed / v_fall,
+            0.0,
+            Check::Between(0.0, REST_REL),
+        ),
+        no_penetration(world, rec),
     ])
 }
 
