@@ -1,0 +1,331 @@
+//! Static contact by microcollisions (thesis §3.5).
+//!
+//! Resting contact becomes a train of small collisions. With ordinary restitution each bounce
+//! loses energy and the resting body sinks through the collision envelope (thickness ε_c) until
+//! the simulation grinds to a halt; and on a ramp the body creeps downhill during the ballistic
+//! flights between collisions. Two remedies, both decided from the contact alone:
+//!
+//! - **Candidate test** (3.18): `−u_z0 < √(2·g·ε_c)`, the speed of a fall from rest through the
+//!   envelope.
+//! - **Type 2, reversing impulse**: `p_r = −2·K⁻¹·u₀` makes u_f = −u₀ and does no work
+//!   (Corollary 1), like a static force. It is applied if it lies in the friction cone
+//!   (p_r,z > 0 and |p_r,t| ≤ μ·p_r,z), cancelling creep.
+//! - **Type 1, boosted restitution** (Fig. 3.13): otherwise the collision is integrated with
+//!   Stronge's law and a restitution coefficient raised with the penetration depth δ into the
+//!   envelope: `e(δ) = e_def + (e_max − e_def)·(δ/ε_c)²`, δ = ε_c − separation, clamped to
+//!   [0, ε_c]. The thesis gives only the graph: a second-order curve with zero slope at δ = 0,
+//!   from e_def up to e_max = 5.0; this quadratic is the natural reading \[inferred\], reaching
+//!   e_max at δ = ε_c. With e > 1 the collision deliberately adds energy.
+//!
+//! Known limitations (thesis): creep is reduced, not removed; stacks of three or more bodies
+//! slow down and of four or more stall.
+
+use crate::integrate::{Response, ResponseKind, Restitution, Settings, Stats, integrate};
+use crate::{CollisionMatrix, ResponseError};
+use glam::DVec3;
+
+/// Parameters of microcollisions (§3.5). Units: any consistent set; the defaults are SI.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MicrocollisionParams {
+    /// Gravitational acceleration g in (3.18), length/time²; default 9.81 (m/s²).
+    pub gravity: f64,
+    /// Collision envelope thickness ε_c, length; default 1e-3 (m). The thesis sets it 2–3
+    /// orders of magnitude below object size (bowling: 1 mm).
+    pub collision_epsilon: f64,
+    /// e_max, the restitution coefficient at full envelope penetration (δ = ε_c);
+    /// dimensionless, default 5.0 (the value used in *Impulse*).
+    pub max_restitution: f64,
+    /// Whether to try the reversing impulse (type 2) before boosted restitution; default true.
+    pub reversing: bool,
+}
+
+impl Default for MicrocollisionParams {
+    fn default() -> Self {
+        Self {
+            gravity: 9.81,
+            collision_epsilon: 1e-3,
+            max_restitution: 5.0,
+            reversing: true,
+        }
+    }
+}
+
+impl MicrocollisionParams {
+    /// The candidate threshold speed √(2·g·ε_c) of (3.18).
+    pub fn threshold_speed(&self) -> f64 {
+        (2.0 * self.gravity * self.collision_epsilon).sqrt()
+    }
+
+    /// (3.18): a collision with normal relative velocity `u_z0` (< 0) is a microcollision
+    /// candidate iff `−u_z0 < √(2·g·ε_c)`.
+    pub fn is_candidate(&self, u_z0: f64) -> bool {
+        -u_z0 < self.threshold_speed()
+    }
+
+    /// Fig. 3.13 [inferred quadratic]: `e(δ) = e_def + (e_max − e_def)·(δ/ε_c)²` with
+    /// δ = ε_c − `separation` clamped to [0, ε_c]; e(0) = e_def, e′(0) = 0, e(ε_c) = e_max.
+    pub fn boosted_restitution(&self, e_def: f64, separation: f64) -> f64 {
+        let eps = self.collision_epsilon;
+        let delta = (eps - separation).clamp(0.0, eps);
+        let x = delta / eps;
+        e_def + (self.max_restitution - e_def) * x * x
+    }
+
+    fn validate(&self) -> Result<(), ResponseError> {
+        let positive = |name, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(ResponseError::InvalidParameter {
+                    name,
+                    value,
+                    requirement: "finite, > 0",
+                })
+            }
+        };
+        positive("gravity g", self.gravity)?;
+        positive("collision epsilon ε_c", self.collision_epsilon)?;
+        if !(self.max_restitution.is_finite() && self.max_restitution >= 1.0) {
+            return Err(ResponseError::InvalidParameter {
+                name: "e_max",
+                value: self.max_restitution,
+                requirement: "finite, ≥ 1",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Resolves a collision with microcollisions (§3.5): if it is a candidate (3.18), first the
+/// reversing impulse (if [`MicrocollisionParams::reversing`] and it lies in the friction cone),
+/// otherwise Stronge integration with e boosted by the penetration depth; non-candidates are
+/// ordinary Stronge collisions with `e_def`. `separation` is the current distance between the
+/// closest points (≥ 0; the penetration into the envelope is ε_c − separation).
+///
+/// The result's [`Response::kind`] tells which path was taken ([`ResponseKind::Reversing`]) and
+/// [`Response::restitution`] the e used.
+///
+/// # Errors
+/// As [`crate::resolve`]; also [`ResponseError::InvalidParameter`] for bad `params`, a
+/// negative or non-finite `separation`, or `e_def` outside [0, 1].
+pub fn resolve_with_microcollisions(
+    k: &CollisionMatrix,
+    u0: DVec3,
+    mu: f64,
+    e_def: f64,
+    separation: f64,
+    params: &MicrocollisionParams,
+    settings: &Settings,
+) -> Result<Response, ResponseError> {
+    params.validate()?;
+    crate::integrate::check_velocity_and_friction(u0, mu)?;
+    if !(e_def.is_finite() && (0.0..=1.0).contains(&e_def)) {
+        return Err(ResponseError::InvalidParameter {
+            name: "restitution coefficient e_def",
+            value: e_def,
+            requirement: "finite, 0 ≤ e_def ≤ 1",
+        });
+    }
+    if !(separation.is_finite() && separation >= 0.0) {
+        return Err(ResponseError::InvalidParameter {
+            name: "separation",
+            value: separation,
+            requirement: "finite, ≥ 0",
+        });
+    }
+    if !params.is_candidate(u0.z) {
+        return integrate(k, u0, mu, e_def, Restitution::Stronge, settings);
+    }
+    if params.reversing
+        && let Some(p) = k.reversing_impulse(u0)
+    {
+        // In the friction cone, with a pushing normal part [inferred: p_r,z > 0].
+        let pt = (p.x * p.x + p.y * p.y).sqrt();
+        if p.z > 0.0 && pt <= mu * p.z {
+            return Ok(Response {
+                impulse: p,
+                velocity: -u0, // Corollary 1: u_f = −u₀, W = 0
+                initial_velocity: u0,
+                restitution: 1.0,
+                law: Restitution::Stronge,
+                compression_work: 0.0,
+                normal_work: 0.0,
+                work: k.work_of_impulse(u0, p),
+                path_work: 0.0,
+                max_compression_impulse: 0.0,
+                sticking: None,
+                kind: ResponseKind::Reversing,
+                stats: Stats::default(),
+                trace: None,
+            });
+        }
+    }
+    let e = params.boosted_restitution(e_def, separation);
+    integrate(k, u0, mu, e, Restitution::Stronge, settings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DMat3;
+
+    /// Digest test 22: g = 9.81, ε_c = 1 mm give 0.1401 m/s; just below is a candidate, just
+    /// above is not.
+    #[test]
+    fn candidate_threshold() {
+        let p = MicrocollisionParams::default();
+        let v = p.threshold_speed();
+        assert!((v - 0.140_071_410_359_145_6).abs() < 1e-15, "{v}");
+        assert!(p.is_candidate(-v * (1.0 - 1e-12)));
+        assert!(!p.is_candidate(-v * (1.0 + 1e-12)));
+        assert!(!p.is_candidate(-v));
+        // cgs (thesis ramp units): g = 981 cm/s², ε_c = 0.1 cm → 14.007 cm/s.
+        let cgs = MicrocollisionParams {
+            gravity: 981.0,
+            collision_epsilon: 0.1,
+            ..p
+        };
+        assert!((cgs.threshold_speed() - 14.007_141_035_914_5).abs() < 1e-12);
+    }
+
+    /// Digest test 23: e(0) = e_def, e′(0) = 0, increasing, e(ε_c) = e_max = 5.
+    #[test]
+    fn boosted_restitution_law() {
+        let p = MicrocollisionParams::default();
+        let eps = p.collision_epsilon;
+        let e_def = 0.3;
+        assert_eq!(p.boosted_restitution(e_def, eps), e_def); // δ = 0
+        assert_eq!(p.boosted_restitution(e_def, 2.0 * eps), e_def); // outside: clamped
+        assert_eq!(p.boosted_restitution(e_def, 0.0), 5.0); // δ = ε_c
+        // Zero slope at δ = 0: e(δ) − e_def = O(δ²).
+        let d = 1e-6 * eps;
+        let slope = (p.boosted_restitution(e_def, eps - d) - e_def) / d;
+        assert!(slope.abs() < 1e-2, "{slope}");
+        let mut prev = e_def;
+        for i in 1..=100 {
+            let e = p.boosted_restitution(e_def, eps * (1.0 - i as f64 / 100.0));
+            assert!(e > prev);
+            prev = e;
+        }
+        // Half-way: e_def + (e_max − e_def)/4.
+        assert!((p.boosted_restitution(e_def, 0.5 * eps) - (0.3 + 4.7 / 4.0)).abs() < 1e-15);
+    }
+
+    /// Digest test 28: under microcollisions (reversing or boosted), every impulse stays in the
+    /// friction cone, and a reversal gives u_f = −u₀.
+    #[test]
+    fn microcollision_impulses_stay_in_the_cone() {
+        use rand::rngs::Xoshiro256PlusPlus;
+        use rand::{RngExt, SeedableRng};
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(71);
+        let params = MicrocollisionParams::default();
+        let s = Settings::default();
+        let (mut reversed, mut boosted) = (0, 0);
+        for _ in 0..5000 {
+            let k = crate::matrix::tests::random_spd(&mut rng);
+            let cm = CollisionMatrix::new(k).unwrap();
+            let speed = params.threshold_speed();
+            let u0 = DVec3::new(
+                rng.random_range(-1.0..1.0) * speed,
+                rng.random_range(-1.0..1.0) * speed,
+                -rng.random_range(0.01..1.2) * speed,
+            );
+            let mu = rng.random_range(0.0..2.0);
+            let e_def = rng.random_range(0.0..=1.0);
+            let sep = rng.random_range(0.0..1.2) * params.collision_epsilon;
+            let r = resolve_with_microcollisions(&cm, u0, mu, e_def, sep, &params, &s).unwrap();
+            let p = r.impulse;
+            assert!(p.z > 0.0);
+            assert!(p.truncate().length() <= mu * p.z * (1.0 + 1e-12));
+            if r.kind == ResponseKind::Reversing {
+                reversed += 1;
+                assert!((u0 + cm.k() * p + u0).length() <= 1e-11 * u0.length());
+            } else {
+                boosted += 1;
+                assert!(r.velocity.z >= 0.0);
+            }
+        }
+        assert!(reversed > 500 && boosted > 500, "{reversed} {boosted}");
+    }
+
+    /// Boosted restitution (e up to e_max = 5 > 1) is Stronge's law with a large e: it matches
+    /// the reference solver, and restitution work is e² times the compression work, so the
+    /// collision adds energy by design when e > 1.
+    #[test]
+    fn boosted_collisions_match_reference() {
+        use crate::reference::{DEFAULT_REFERENCE_STEPS, reference_resolve};
+        use rand::rngs::Xoshiro256PlusPlus;
+        use rand::{RngExt, SeedableRng};
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(72);
+        let params = MicrocollisionParams {
+            reversing: false,
+            ..MicrocollisionParams::default()
+        };
+        let s = Settings::default();
+        for _ in 0..100 {
+            let k = crate::matrix::tests::random_spd(&mut rng);
+            let cm = CollisionMatrix::new(k).unwrap();
+            let v = params.threshold_speed();
+            let u0 = DVec3::new(
+                rng.random_range(-1.0..1.0) * v,
+                rng.random_range(-1.0..1.0) * v,
+                -rng.random_range(0.05..0.95) * v,
+            );
+            let mu = rng.random_range(0.0..1.5);
+            let sep = rng.random_range(0.0..1.0) * params.collision_epsilon;
+            let r = resolve_with_microcollisions(&cm, u0, mu, 0.3, sep, &params, &s).unwrap();
+            let e = params.boosted_restitution(0.3, sep);
+            assert_eq!(r.restitution, e);
+            let rf = reference_resolve(k, u0, mu, e, Restitution::Stronge, DEFAULT_REFERENCE_STEPS);
+            assert!((r.velocity - rf.velocity).length() < 1e-6 * u0.length());
+            let wr = r.restitution_work();
+            assert!((wr + e * e * r.compression_work).abs() < 1e-8 * r.compression_work.abs());
+        }
+    }
+
+    /// Digest tests 9 and 24: the reversing impulse gives u_f = −u₀ and W = 0 exactly
+    /// (Corollary 1) when inside the cone; outside it the collision is integrated with boosted e.
+    #[test]
+    fn reversing_impulse_selection() {
+        // Block on a 30° ramp as a point mass (K = 1/m·1): after a ballistic hop the contact
+        // velocity points along gravity, |u_t|/|u_z| = tan 30° = 0.577.
+        let m = 2.0;
+        let k = CollisionMatrix::new(DMat3::IDENTITY * (1.0 / m)).unwrap();
+        let params = MicrocollisionParams::default();
+        let s = Settings::default();
+        let u0 = DVec3::new(0.05 * 0.5, 0.0, -0.05 * 0.75f64.sqrt());
+        // μ = 0.9 > tan 30°: inside the cone → reversal.
+        let r = resolve_with_microcollisions(&k, u0, 0.9, 0.2, 5e-4, &params, &s).unwrap();
+        assert_eq!(r.kind, ResponseKind::Reversing);
+        assert!((r.impulse - (-2.0 * m) * u0).length() < 1e-15);
+        assert!((u0 + k.k() * r.impulse + u0).length() < 1e-16);
+        assert!(r.work.abs() < 1e-18, "{}", r.work);
+        // μ = 0.3 < tan 30°: outside → integrated with e = e(δ) = 0.2 + 4.8·(0.5)² = 1.4.
+        let r = resolve_with_microcollisions(&k, u0, 0.3, 0.2, 5e-4, &params, &s).unwrap();
+        assert_eq!(r.kind, ResponseKind::Integrated);
+        assert!((r.restitution - 1.4).abs() < 1e-15);
+        // Point mass: constant sliding direction, Newton's law holds: u_z,f = −e·u_z0.
+        assert!((r.velocity.z + 1.4 * u0.z).abs() < 1e-12);
+        // Contact forces stay in the friction cone (digest test 28).
+        assert!(r.impulse.truncate().length() <= 0.3 * r.impulse.z * (1.0 + 1e-12));
+        // Not a candidate: ordinary e_def.
+        let fast = DVec3::new(0.0, 0.0, -1.0);
+        let r = resolve_with_microcollisions(&k, fast, 0.3, 0.2, 0.0, &params, &s).unwrap();
+        assert_eq!(r.restitution, 0.2);
+        // Reversal disabled: boosted integration even inside the cone.
+        let no_rev = MicrocollisionParams {
+            reversing: false,
+            ..params
+        };
+        let r = resolve_with_microcollisions(&k, u0, 0.9, 0.2, 5e-4, &no_rev, &s).unwrap();
+        assert_eq!(r.kind, ResponseKind::Integrated);
+        // Bad inputs.
+        assert!(resolve_with_microcollisions(&k, u0, 0.9, 1.5, 0.0, &params, &s).is_err());
+        assert!(resolve_with_microcollisions(&k, u0, 0.9, 0.5, -1.0, &params, &s).is_err());
+        let bad = MicrocollisionParams {
+            gravity: 0.0,
+            ..params
+        };
+        assert!(resolve_with_microcollisions(&k, u0, 0.9, 0.5, 0.0, &bad, &s).is_err());
+    }
+}
