@@ -301,7 +301,7 @@ fn paths_plot(rec: &Recording, world: &World) -> String {
         .collect();
     let mut spread = [0.0f64; 3];
     for &i in &dynamic {
-        for ax in 0..3 {
+        for (ax, spread) in spread.iter_mut().enumerate() {
             let (lo, hi) =
                 rec.frames
                     .iter()
@@ -309,7 +309,7 @@ fn paths_plot(rec: &Recording, world: &World) -> String {
                         let x = f.bodies[i].position[ax];
                         (l.min(x), h.max(x))
                     });
-            spread[ax] = spread[ax].max(hi - lo);
+            *spread = spread.max(hi - lo);
         }
     }
     let mut axes = [0usize, 1, 2];

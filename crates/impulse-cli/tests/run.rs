@@ -52,8 +52,8 @@ fn run_two_balls_writes_summary_csv_and_plots() {
     assert_eq!(header, "time,body,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz");
     let last_target = text
         .lines()
-        .filter(|l| l.split(',').nth(1) == Some("target"))
-        .last()
+        .rev()
+        .find(|l| l.split(',').nth(1) == Some("target"))
         .unwrap();
     let cols: Vec<f64> = last_target
         .split(',')

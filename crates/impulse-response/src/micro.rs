@@ -345,7 +345,8 @@ mod grazing {
     /// at 6.7 m/s with 120 J gained.
     #[test]
     fn grazing_sliding_microcollision_gains_no_energy() {
-        let (m, r) = (6.283_185_307_179_586, 0.1);
+        // A 0.1 m ball of density 1500: m = 2π kg.
+        let (m, r) = (std::f64::consts::TAU, 0.1);
         let ball = Body::moving(m, DMat3::from_diagonal(DVec3::splat(0.4 * m * r * r))).unwrap();
         let frame = ContactFrame::from_normal(DVec3::new(0.0, 0.0, -1.0)).unwrap();
         let k = CollisionMatrix::rigid(

@@ -321,7 +321,7 @@ fn fit_line(points: &[(f64, f64)]) -> (f64, f64) {
 }
 
 fn v6_block_on_ramp(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
-    let b = body(&world, "block")?;
+    let b = body(world, "block")?;
     let (g, mu, v0) = (981.0f64, 0.9f64, 548.0f64);
     let th = 30f64.to_radians();
     let a = g * (mu * th.cos() - th.sin());
@@ -359,12 +359,12 @@ fn v6_block_on_ramp(world: &World, rec: &Recording) -> Result<Vec<Metric>, Strin
             0.0,
             Check::Between(-CREEP_REL, CREEP_REL),
         ),
-        no_penetration(&world, &rec),
+        no_penetration(world, rec),
     ])
 }
 
 fn v7_sliding_to_rolling(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
-    let b = body(&world, "ball")?;
+    let b = body(world, "ball")?;
     let (v0, mu, g) = (5.0f64, 0.2f64, 9.81f64);
     let t_ref = 2.0 * v0 / (7.0 * mu * g);
     let s_ref = 12.0 * v0 * v0 / (49.0 * mu * g);
@@ -402,7 +402,7 @@ fn v7_sliding_to_rolling(world: &World, rec: &Recording) -> Result<Vec<Metric>, 
             s_ref + v_ref * (last.time - t_ref),
             Check::Rel(SCENE_REL),
         ),
-        no_penetration(&world, &rec),
+        no_penetration(world, rec),
     ])
 }
 
@@ -422,7 +422,7 @@ fn fit_circle(points: &[(f64, f64)]) -> (f64, f64, f64) {
 }
 
 fn v8_platter(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
-    let b = body(&world, "ball")?;
+    let b = body(world, "ball")?;
     let omega = 2.0 * std::f64::consts::PI;
     let pts: Vec<(f64, f64)> = rec
         .frames
@@ -466,12 +466,12 @@ fn v8_platter(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             Check::Between(0.0, ORBIT_RADIUS_DRIFT),
         ),
         Metric::new("orbit_radius", r, 0.1, Check::Rel(ORBIT_RADIUS_DRIFT)),
-        no_penetration(&world, &rec),
+        no_penetration(world, rec),
     ])
 }
 
 fn v9_two_ball(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
-    let (a, b) = (body(&world, "striker")?, body(&world, "target")?);
+    let (a, b) = (body(world, "striker")?, body(world, "target")?);
     let (v0, e) = (2.0, 0.6);
     let last = rec.frames.last().ok_or("no frames")?;
     Ok(vec![
@@ -499,7 +499,7 @@ fn v9_two_ball(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
 fn v10_chain(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
     let v0 = 2.0;
     let last = rec.frames.last().ok_or("no frames")?;
-    let v = |name: &str| -> Result<DVec3, String> { Ok(last.bodies[body(&world, name)?].velocity) };
+    let v = |name: &str| -> Result<DVec3, String> { Ok(last.bodies[body(world, name)?].velocity) };
     let mut m = vec![
         Metric::new(
             "far_ball_speed_over_v0",
@@ -522,12 +522,12 @@ fn v10_chain(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             Check::Between(0.0, CHAIN_STILL_REL),
         ));
     }
-    m.push(no_penetration(&world, &rec));
+    m.push(no_penetration(world, rec));
     Ok(m)
 }
 
 fn v13_block_drop(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
-    let (lo, up) = (body(&world, "lower")?, body(&world, "upper")?);
+    let (lo, up) = (body(world, "lower")?, body(world, "upper")?);
     let last = rec.frames.last().ok_or("no frames")?;
     // The upper block falls ~0.26 m before it first hits: impact speed √(2·g·h).
     let v_impact = (2.0f64 * 9.81 * 0.26).sqrt();
@@ -579,7 +579,7 @@ fn v13_block_drop(world: &World, rec: &Recording) -> Result<Vec<Metric>, String>
             1.0,
             Check::Exact,
         ),
-        no_penetration(&world, &rec),
+        no_penetration(world, rec),
     ])
 }
 
@@ -603,7 +603,7 @@ fn v15_elastic(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             1.0,
             Check::Exact,
         ),
-        no_penetration(&world, &rec),
+        no_penetration(world, rec),
     ])
 }
 
@@ -628,14 +628,14 @@ fn v15_dissipative(world: &World, rec: &Recording) -> Result<Vec<Metric>, String
             1.0,
             Check::Exact,
         ),
-        no_penetration(&world, &rec),
+        no_penetration(world, rec),
     ])
 }
 
 fn bullet(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
     let last = rec.frames.last().ok_or("no frames")?;
     let half_thickness = 0.0005;
-    let (b1, b2) = (body(&world, "bullet")?, body(&world, "rim-bullet")?);
+    let (b1, b2) = (body(world, "bullet")?, body(world, "rim-bullet")?);
     // The aimed bullet must come back: still on the near side, moving away.
     let back = last.bodies[b1].position.x < -half_thickness && last.bodies[b1].velocity.x < 0.0;
     Ok(vec![
@@ -651,7 +651,7 @@ fn bullet(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             1.0,
             Check::Exact,
         ),
-        no_penetration(&world, &rec),
+        no_penetration(world, rec),
     ])
 }
 
