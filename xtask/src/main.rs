@@ -16,6 +16,7 @@
 //! [`cases`] (the registry). Dependencies are kept minimal: insta and serde_json only; the
 //! command line is parsed by hand.
 
+mod bench;
 mod cases;
 mod ci;
 mod layering;
@@ -37,6 +38,10 @@ commands:
   validate [--update] [--case NAME]   run the validation cases (all, or only NAME), check each
                                       metric against its reference, compare with the snapshots
                                       in fixtures/snapshots/; --update writes the snapshots
+  bench [--out DIR] [--case NAME]     speed against error: every scene at three accuracy settings
+                                      in a release build; prints slowdown next to thesis Table 7.1
+                                      and the error; writes bench.csv and one SVG per scene to DIR
+                                      (default target/bench)
   layering                            check crate dependencies against the layer table of
                                       docs/architecture.md
   help                                print this message
@@ -47,6 +52,7 @@ commands:
 enum Command {
     Ci,
     Validate(validate::Options),
+    Bench(bench::Options),
     Layering,
     Help,
 }
@@ -63,6 +69,7 @@ fn main() -> ExitCode {
     let result = match command {
         Command::Ci => ci::run(),
         Command::Validate(options) => validate::run(&options),
+        Command::Bench(options) => bench::run_bench(&options),
         Command::Layering => layering::run(),
         Command::Help => {
             print!("{USAGE}");
@@ -92,6 +99,7 @@ fn parse_args(args: &[String]) -> Result<Command> {
         "layering" => no_arguments(Command::Layering),
         "help" | "-h" | "--help" => no_arguments(Command::Help),
         "validate" => parse_validate(rest).map(Command::Validate),
+        "bench" => parse_bench(rest).map(Command::Bench),
         other => Err(format!("unknown command `{other}`")),
     }
 }
@@ -114,6 +122,23 @@ fn parse_validate(args: &[String]) -> Result<validate::Options> {
         };
         if options.case.replace(case).is_some() {
             return Err("`--case` given more than once".to_owned());
+        }
+    }
+    Ok(options)
+}
+
+/// Parses `bench [--out DIR] [--case NAME] [--in-release]`.
+fn parse_bench(args: &[String]) -> Result<bench::Options> {
+    let mut options = bench::Options::default();
+    let mut args = args.iter();
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--out" => options.out = Some(args.next().ok_or("`--out` needs a directory")?.into()),
+            "--case" => {
+                options.case = Some(args.next().ok_or("`--case` needs a case name")?.clone())
+            }
+            "--in-release" => options.in_release = true,
+            _ => return Err(format!("unexpected argument `{arg}` to `bench`")),
         }
     }
     Ok(options)

@@ -6,6 +6,8 @@
 //! **Must not know** any algorithm: each command is a thin shell over a library crate.
 //!
 //! Commands:
+//! - `impulse run <scene.ron> [--until T] [--out traj.csv|traj.json] [--plot DIR]`: simulate
+//!   a scene file (thesis chapters 1–3 and 7) and print a summary.
 //! - `impulse massprops <mesh.obj> [--density D | --mass M]`: exact mass properties of a closed
 //!   polygon mesh (thesis chapter 6), printed as JSON.
 //! - `impulse dynamics <model.urdf> [--q … --qd … --tau …] [--gravity gx,gy,gz]`: forward
@@ -14,6 +16,7 @@
 #![forbid(unsafe_code)]
 
 mod dynamics;
+mod run;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -34,6 +37,25 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Simulate a scene file (RON) and print a summary: simulated and wall time, slowdown,
+    /// collisions, microcollisions, energy, penetration.
+    Run {
+        /// The scene file (.ron); see fixtures/scenes/ for examples.
+        scene: PathBuf,
+        /// Simulated end time in seconds (default: the scene's `duration`).
+        #[arg(long)]
+        until: Option<f64>,
+        /// Write the trajectory (one row per frame and body) to this .csv or .json file.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Write SVG plots (energy.svg, paths.svg) into this directory.
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Worker threads for the per-body work (default: every core). Results do not depend
+        /// on it.
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Exact mass properties of a closed polygon mesh (Wavefront OBJ), printed as JSON.
     ///
     /// The mesh must be closed and consistently oriented with faces counter-clockwise seen
@@ -127,6 +149,19 @@ fn without_negative_zero(v: serde_json::Value) -> serde_json::Value {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
+        Command::Run {
+            scene,
+            until,
+            out,
+            plot,
+            threads,
+        } => run::run(&run::RunArgs {
+            scene,
+            until: *until,
+            out: out.as_deref(),
+            plot: plot.as_deref(),
+            threads: *threads,
+        }),
         Command::Massprops {
             mesh,
             density,

@@ -310,8 +310,8 @@ pub mod tol {
     /// within this angle of it; radians, default `0.2`.
     pub const RAY_NEAREST_MAX_ANGLE: f64 = 0.2;
 
-    /// Real roots of the quartic closer than this (relative to 1 + |t|) are one root;
-    /// dimensionless, default `1e-12`.
+    /// Real roots of a polynomial closer than this, relative to their magnitude, are one
+    /// root; dimensionless, default `1e-12`.
     pub const ROOT_MERGE_REL: f64 = 1e-12;
 
     /// Rays of constant sliding direction closer than this are the same ray; radians, default

@@ -351,7 +351,10 @@ pub(crate) fn real_roots(c: &[f64]) -> Vec<f64> {
         }
     }
     roots.sort_by(f64::total_cmp);
-    roots.dedup_by(|a, b| (*a - *b).abs() <= tol::ROOT_MERGE_REL * (1.0 + a.abs().max(b.abs())));
+    // Relative to the roots themselves, not to 1 + |x|: the same routine finds the crossings
+    // of work and velocity along a ray in Δp_z, whose roots can be 1e-13 apart and both real
+    // (a grazing contact); an absolute merge there dropped the positive root.
+    roots.dedup_by(|a, b| (*a - *b).abs() <= tol::ROOT_MERGE_REL * a.abs().max(b.abs()));
     roots
 }
 

@@ -5,6 +5,7 @@
 //! names are unique and stable (ASCII letters, digits, `-`, `_`, `.`).
 
 mod massprops;
+pub mod scenes;
 
 use crate::validate::case::Case;
 
@@ -12,5 +13,6 @@ use crate::validate::case::Case;
 pub fn all() -> Vec<Case> {
     let mut cases = Vec::new();
     cases.extend(massprops::cases());
+    cases.extend(scenes::cases());
     cases
 }

@@ -26,7 +26,7 @@
               unused while that registry is empty"
 )]
 pub mod case;
-mod check;
+pub mod check;
 mod snapshot;
 
 use std::any::Any;

@@ -1,0 +1,243 @@
+//! Malformed and hostile scenes: every one must give an `Error`, never a panic.
+
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+
+use crate::{Scene, SceneDesc, SimError, World};
+
+/// A valid scene every mutation starts from: a floor, a box, a sphere, a compound.
+const VALID: &str = r#"Scene(
+    name: "base",
+    gravity: (0.0, 0.0, -9.81),
+    duration: 0.05,
+    collision_epsilon: 1e-4,
+    output_rate: 100.0,
+    default_contact: Contact(friction: 0.4, restitution: 0.5),
+    contacts: [MaterialPair(a: "steel", b: "default", friction: 0.2, restitution: 0.9)],
+    bodies: [
+        Body(name: "floor", shape: Box(half_extents: (1.0, 1.0, 0.1)), position: (0.0, 0.0, -0.1), motion: Fixed),
+        Body(name: "box", shape: Box(half_extents: (0.05, 0.04, 0.03)), position: (0.0, 0.0, 0.031),
+             velocity: (0.1, 0.0, -0.2), angular_velocity: (1.0, 2.0, 3.0), mass: Density(700.0)),
+        Body(name: "ball", shape: Sphere(radius: 0.05), position: (0.3, 0.0, 0.2), mass: Mass(1.0), material: "steel"),
+        Body(name: "hammer", shape: Compound(parts: [
+                Part(shape: Box(half_extents: (0.1, 0.01, 0.01))),
+                Part(shape: Box(half_extents: (0.02, 0.03, 0.03)), position: (0.1, 0.0, 0.0)),
+             ]), position: (-0.4, 0.0, 0.3), rotation: AxisAngle(axis: (0.0, 1.0, 0.0), degrees: 10.0)),
+    ],
+)"#;
+
+/// Parse, validate, build and run briefly; `Ok` or a typed error, and no panic.
+fn attempt(text: &str) -> Result<(), SimError> {
+    let desc = SceneDesc::from_ron(text, "hostile")?;
+    let mut world = World::from_scene(&Scene::new(desc, "."))?;
+    world.step_until(0.02)
+}
+
+#[test]
+fn the_base_scene_is_valid_and_runs() {
+    attempt(VALID).unwrap();
+}
+
+fn expect_invalid(text: &str, what: &str, field: &str) {
+    match attempt(text) {
+        Err(SimError::Invalid {
+            what: w, field: f, ..
+        }) => {
+            assert!(w.contains(what), "what: {w} (wanted {what})");
+            assert!(f.contains(field), "field: {f} (wanted {field})");
+        }
+        other => panic!("wanted Invalid({what}, {field}), got {other:?}"),
+    }
+}
+
+#[test]
+fn named_errors_for_bad_values() {
+    expect_invalid(
+        &VALID.replace("mass: Density(700.0)", "mass: Density(-700.0)"),
+        "body \"box\"",
+        "mass",
+    );
+    expect_invalid(
+        &VALID.replace("mass: Mass(1.0)", "mass: Mass(0.0)"),
+        "body \"ball\"",
+        "mass",
+    );
+    expect_invalid(
+        &VALID.replace("velocity: (0.1, 0.0, -0.2)", "velocity: (NaN, 0.0, -0.2)"),
+        "body \"box\"",
+        "velocity",
+    );
+    expect_invalid(
+        &VALID.replace("radius: 0.05", "radius: inf"),
+        "body \"ball\"",
+        "shape.radius",
+    );
+    expect_invalid(
+        &VALID.replace("collision_epsilon: 1e-4", "collision_epsilon: -1e-4"),
+        "scene",
+        "collision_epsilon",
+    );
+    expect_invalid(
+        &VALID.replace("collision_epsilon: 1e-4", "collision_epsilon: 1e-300"),
+        "scene",
+        "collision_epsilon",
+    );
+    expect_invalid(
+        &VALID.replace("restitution: 0.5", "restitution: 1.5"),
+        "scene",
+        "default_contact.restitution",
+    );
+    expect_invalid(
+        &VALID.replace("friction: 0.2", "friction: -0.2"),
+        "contacts[0]",
+        "friction",
+    );
+    expect_invalid(
+        &VALID.replace("name: \"ball\"", "name: \"box\""),
+        "body \"box\"",
+        "name",
+    );
+    expect_invalid(
+        &VALID.replace("output_rate: 100.0", "output_rate: 1e300"),
+        "scene",
+        "output_rate",
+    );
+    expect_invalid(
+        &VALID.replace("degrees: 10.0", "degrees: NaN"),
+        "body \"hammer\"",
+        "rotation",
+    );
+    expect_invalid(
+        &VALID.replace(
+            "Part(shape: Box(half_extents: (0.1, 0.01, 0.01))),",
+            "Part(shape: Compound(parts: [])),",
+        ),
+        "body \"hammer\"",
+        "parts",
+    );
+}
+
+#[test]
+fn empty_scene_and_missing_fields_are_errors() {
+    let empty = "Scene(duration: 1.0, collision_epsilon: 1e-3, bodies: [])";
+    expect_invalid(empty, "scene", "bodies");
+    // Missing `duration`: a parse error naming the field.
+    let text = VALID.replace("duration: 0.05,", "");
+    match attempt(&text) {
+        Err(SimError::Parse { message, .. }) => assert!(message.contains("duration"), "{message}"),
+        other => panic!("{other:?}"),
+    }
+    // Unknown field.
+    let text = VALID.replace("duration: 0.05,", "duration: 0.05, durration: 1.0,");
+    assert!(matches!(attempt(&text), Err(SimError::Parse { .. })));
+    assert!(matches!(attempt(""), Err(SimError::Parse { .. })));
+    assert!(matches!(attempt("Scene("), Err(SimError::Parse { .. })));
+}
+
+#[test]
+fn overlapping_and_degenerate_bodies_are_errors() {
+    // The ball moved into the box.
+    let text = VALID.replace("position: (0.3, 0.0, 0.2)", "position: (0.0, 0.0, 0.05)");
+    match attempt(&text) {
+        Err(SimError::InitialOverlap { a, b, .. }) => {
+            assert_eq!((a.as_str(), b.as_str()), ("box", "ball"));
+        }
+        other => panic!("{other:?}"),
+    }
+    // Coplanar hull points: no volume.
+    let text = VALID.replace(
+        "shape: Sphere(radius: 0.05)",
+        "shape: Hull(points: [(0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0)])",
+    );
+    match attempt(&text) {
+        Err(SimError::Geometry { body, .. }) => assert_eq!(body, "ball"),
+        other => panic!("{other:?}"),
+    }
+    // A missing OBJ file.
+    let text = VALID.replace(
+        "shape: Sphere(radius: 0.05)",
+        "shape: Obj(path: \"no/such/file.obj\")",
+    );
+    match attempt(&text) {
+        Err(SimError::Geometry { body, message }) => {
+            assert_eq!(body, "ball");
+            assert!(message.contains("file.obj"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Nothing dynamic.
+    let only_floor = "Scene(duration: 1.0, collision_epsilon: 1e-3, bodies: [
+        Body(name: \"floor\", shape: Box(half_extents: (1, 1, 1)), motion: Fixed)])";
+    expect_invalid(only_floor, "scene", "bodies");
+}
+
+/// Random mutations of the valid scene: numbers replaced by hostile values, characters
+/// deleted, lines dropped. Every outcome is `Ok` or an error; a panic fails the test.
+#[test]
+fn random_mutations_never_panic() {
+    const MUTATIONS: usize = 600;
+    const HOSTILE: [&str; 12] = [
+        "NaN", "inf", "-inf", "-1.0", "0.0", "1e308", "-1e308", "1e-320", "5e-324", "1e30", "-0.0",
+        "3",
+    ];
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(2026);
+    let numbers: Vec<(usize, usize)> = {
+        let bytes = VALID.as_bytes();
+        let mut spans = Vec::new();
+        let mut k = 0;
+        while k < bytes.len() {
+            let starts = bytes[k].is_ascii_digit()
+                && (k == 0 || !(bytes[k - 1].is_ascii_alphanumeric() || bytes[k - 1] == b'_'));
+            if starts {
+                let s = k;
+                while k < bytes.len()
+                    && (bytes[k].is_ascii_digit() || matches!(bytes[k], b'.' | b'e' | b'-'))
+                {
+                    k += 1;
+                }
+                spans.push((s, k));
+            } else {
+                k += 1;
+            }
+        }
+        spans
+    };
+    let (mut ok, mut errors) = (0, 0);
+    for _ in 0..MUTATIONS {
+        let mut text = VALID.to_string();
+        for _ in 0..rng.random_range(1..4) {
+            match rng.random_range(0..3) {
+                0 => {
+                    let (s, e) = numbers[rng.random_range(0..numbers.len())];
+                    if e <= text.len() && text.is_char_boundary(s) && text.is_char_boundary(e) {
+                        text.replace_range(s..e, HOSTILE[rng.random_range(0..HOSTILE.len())]);
+                    }
+                }
+                1 => {
+                    let k = rng.random_range(0..text.len());
+                    if text.is_char_boundary(k) && text.is_char_boundary(k + 1) {
+                        text.remove(k);
+                    }
+                }
+                _ => {
+                    let lines: Vec<&str> = text.lines().collect();
+                    let drop = rng.random_range(0..lines.len());
+                    text = lines
+                        .iter()
+                        .enumerate()
+                        .filter(|(i, _)| *i != drop)
+                        .map(|(_, l)| *l)
+                        .collect::<Vec<_>>()
+                        .join("\n");
+                }
+            }
+        }
+        match attempt(&text) {
+            Ok(()) => ok += 1,
+            Err(_) => errors += 1,
+        }
+    }
+    eprintln!("{MUTATIONS} mutated scenes: {ok} ran, {errors} refused with an error");
+    // Both outcomes must occur, or the mutations are not exercising anything.
+    assert!(ok > 0 && errors > 0, "ok {ok}, errors {errors}");
+}

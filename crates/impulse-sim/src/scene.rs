@@ -1,0 +1,645 @@
+//! Scene files: a world described in RON ([`SceneDesc`]), parsed and validated.
+//!
+//! Every length, mass and time is in the scene's own consistent units (the bundled scenes use
+//! SI, or cm/g/s where the thesis does). A minimal scene:
+//!
+//! ```ron
+//! Scene(
+//!     gravity: (0.0, 0.0, -9.81),
+//!     duration: 1.0,
+//!     collision_epsilon: 1e-4,
+//!     bodies: [
+//!         Body(name: "floor", shape: Box(half_extents: (1.0, 1.0, 0.1)),
+//!              position: (0.0, 0.0, -0.1), motion: Fixed),
+//!         Body(name: "ball", shape: Sphere(radius: 0.05), position: (0.0, 0.0, 0.5),
+//!              mass: Density(7800.0)),
+//!     ],
+//! )
+//! ```
+//!
+//! [`SceneDesc::validate`] checks every number before a world is built; its errors name the
+//! body (or material, or scene field) and the field that is wrong.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::SimError;
+
+/// A whole scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Scene", deny_unknown_fields)]
+pub struct SceneDesc {
+    /// A short name, used in reports.
+    #[serde(default)]
+    pub name: String,
+    /// Free text: what the scene shows and where it comes from.
+    #[serde(default)]
+    pub description: String,
+    /// Gravitational acceleration (world).
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// Simulated time to run (s), unless the command line says otherwise.
+    pub duration: f64,
+    /// Collision epsilon ε_c (length): bodies closer than this are in contact (thesis §2.2).
+    /// Two to three orders of magnitude below the body sizes.
+    pub collision_epsilon: f64,
+    /// Frames recorded per simulated second.
+    #[serde(default = "default_output_rate")]
+    pub output_rate: f64,
+    /// Contact properties used for a pair of materials not listed in `contacts`.
+    #[serde(default)]
+    pub default_contact: ContactDesc,
+    /// Contact properties per pair of materials.
+    #[serde(default)]
+    pub contacts: Vec<MaterialPairDesc>,
+    /// Solver settings.
+    #[serde(default)]
+    pub accuracy: AccuracyDesc,
+    /// The bodies.
+    pub bodies: Vec<BodyDesc>,
+}
+
+/// Most frames a run may record (`duration × output_rate`): beyond this the recording alone
+/// would need gigabytes. Default `10_000_000`.
+pub const MAX_FRAMES: f64 = 1e7;
+
+/// Smallest collision epsilon relative to the largest body extent in the scene. Distances are
+/// computed to about 1e-15 of the body size; an ε_c within a few orders of that makes every
+/// contact a rounding question and the event loop crawl. Default `1e-9`.
+pub const MIN_EPSILON_REL: f64 = 1e-9;
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+
+fn default_output_rate() -> f64 {
+    100.0
+}
+
+/// Friction and restitution of a contact.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Contact", deny_unknown_fields)]
+pub struct ContactDesc {
+    /// Coulomb friction coefficient μ ≥ 0.
+    pub friction: f64,
+    /// Restitution e ∈ [0, 1] (Stronge's energetic coefficient, thesis §3.3).
+    pub restitution: f64,
+}
+
+impl Default for ContactDesc {
+    fn default() -> Self {
+        Self {
+            friction: 0.3,
+            restitution: 0.5,
+        }
+    }
+}
+
+/// Contact properties of one pair of materials (either order).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "MaterialPair", deny_unknown_fields)]
+pub struct MaterialPairDesc {
+    /// First material name.
+    pub a: String,
+    /// Second material name.
+    pub b: String,
+    /// Friction coefficient μ ≥ 0.
+    pub friction: f64,
+    /// Restitution e ∈ [0, 1].
+    pub restitution: f64,
+}
+
+/// Solver settings with their defaults.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Accuracy", deny_unknown_fields, default)]
+pub struct AccuracyDesc {
+    /// Local error per step of the rotation integrator (see
+    /// [`crate::body::Integrator::rotation_tolerance`]).
+    pub rotation_tolerance: f64,
+    /// Relative tolerance of the collision integrator of `impulse-response`.
+    pub collision_tolerance: f64,
+}
+
+impl Default for AccuracyDesc {
+    fn default() -> Self {
+        Self {
+            rotation_tolerance: 1e-12,
+            collision_tolerance: 1e-10,
+        }
+    }
+}
+
+/// One body.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Body", deny_unknown_fields)]
+pub struct BodyDesc {
+    /// Unique name.
+    pub name: String,
+    /// Geometry, in the body's own frame.
+    pub shape: ShapeDesc,
+    /// Position of the shape frame's origin (world).
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Orientation of the shape frame (world).
+    #[serde(default)]
+    pub rotation: RotationDesc,
+    /// Velocity of the centre of mass (world).
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    /// Angular velocity (world, rad/s).
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+    /// How the body moves.
+    #[serde(default)]
+    pub motion: MotionDesc,
+    /// Mass from a density or a total mass (dynamic bodies; default density 1).
+    #[serde(default)]
+    pub mass: Option<MassDesc>,
+    /// Material name (for the contact table); `"default"` if omitted.
+    #[serde(default = "default_material")]
+    pub material: String,
+}
+
+fn default_material() -> String {
+    "default".to_string()
+}
+
+/// An orientation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum RotationDesc {
+    /// No rotation.
+    #[default]
+    Identity,
+    /// A rotation by `degrees` about `axis` (need not be unit).
+    AxisAngle {
+        /// Rotation axis.
+        axis: [f64; 3],
+        /// Angle (degrees).
+        degrees: f64,
+    },
+    /// A unit quaternion `(x, y, z, w)` (normalised when read).
+    Quaternion([f64; 4]),
+}
+
+/// How much a body weighs.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum MassDesc {
+    /// Uniform density (mass per volume).
+    Density(f64),
+    /// Total mass, spread uniformly over the volume.
+    Mass(f64),
+}
+
+/// How a body moves.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum MotionDesc {
+    /// Ballistic between collisions.
+    #[default]
+    Dynamic,
+    /// Never moves.
+    Fixed,
+    /// Rotates at `rate` (rad/s) about `axis` through its centre (a spinning platter).
+    Spinner {
+        /// Rotation axis (world).
+        axis: [f64; 3],
+        /// Angular rate (rad/s, right-handed about the axis).
+        rate: f64,
+    },
+    /// Translates sinusoidally along `axis`: `x(t) = x0 + amplitude·sin(2π·frequency·t + phase)·axis`
+    /// (a vibrating feeder tray).
+    Oscillator {
+        /// Direction of motion (world).
+        axis: [f64; 3],
+        /// Amplitude (length).
+        amplitude: f64,
+        /// Frequency (Hz).
+        frequency: f64,
+        /// Phase at t = 0 (rad).
+        #[serde(default)]
+        phase: f64,
+    },
+}
+
+/// Geometry of a body.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ShapeDesc {
+    /// An exact sphere centred on the frame origin.
+    Sphere {
+        /// Radius.
+        radius: f64,
+    },
+    /// A box centred on the frame origin.
+    Box {
+        /// Half side lengths.
+        half_extents: [f64; 3],
+    },
+    /// A polyhedral sphere: the icosahedron refined `level − 1` times (20·4^(level−1) faces).
+    GeodesicSphere {
+        /// Circumradius.
+        radius: f64,
+        /// Refinement level ≥ 1.
+        level: u32,
+    },
+    /// A right prism over a regular polygon, axis along z (a coin, a disc, a domino-like slab).
+    Prism {
+        /// Number of sides ≥ 3.
+        sides: u32,
+        /// Circumradius of the polygon.
+        radius: f64,
+        /// Half height along z.
+        half_height: f64,
+    },
+    /// The convex hull of points.
+    Hull {
+        /// The points (at least 4, not coplanar).
+        points: Vec<[f64; 3]>,
+    },
+    /// A convex polyhedron from an OBJ file (path relative to the scene file).
+    Obj {
+        /// The file.
+        path: String,
+    },
+    /// A non-convex body: convex parts at poses in the body frame.
+    Compound {
+        /// The parts.
+        parts: Vec<PartDesc>,
+    },
+}
+
+/// One convex part of a compound body.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Part", deny_unknown_fields)]
+pub struct PartDesc {
+    /// The part's geometry (not itself a compound).
+    pub shape: ShapeDesc,
+    /// Position in the body frame.
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Orientation in the body frame.
+    #[serde(default)]
+    pub rotation: RotationDesc,
+}
+
+/// A parsed scene with the directory its relative paths are resolved against.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The description.
+    pub desc: SceneDesc,
+    /// Directory of the scene file (for `Obj` paths).
+    pub base_dir: PathBuf,
+}
+
+impl SceneDesc {
+    /// Parses RON text. `source` names the text in errors (a file name).
+    ///
+    /// # Errors
+    /// [`SimError::Parse`] with the line and column of the first problem.
+    pub fn from_ron(text: &str, source: &str) -> Result<Self, SimError> {
+        // Optional fields are written without `Some(…)`: `mass: Density(7800.0)`.
+        ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+            .from_str(text)
+            .map_err(|e| SimError::Parse {
+                source_name: source.to_string(),
+                message: e.to_string(),
+            })
+    }
+
+    /// Serialises to pretty RON.
+    ///
+    /// # Errors
+    /// [`SimError::Parse`] if serialisation fails (not expected for valid values).
+    pub fn to_ron(&self) -> Result<String, SimError> {
+        ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default()).map_err(|e| {
+            SimError::Parse {
+                source_name: "<serialise>".into(),
+                message: e.to_string(),
+            }
+        })
+    }
+
+    /// Checks every field that can be checked without building geometry: finite numbers,
+    /// positive ε_c, duration, rates and masses, μ ≥ 0, e ∈ [0, 1], unique body names, known
+    /// materials, non-empty scene.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the body (or `scene`) and the field.
+    pub fn validate(&self) -> Result<(), SimError> {
+        let scene = |field: &str, problem: String| SimError::Invalid {
+            what: "scene".into(),
+            field: field.into(),
+            problem,
+        };
+        if self.bodies.is_empty() {
+            return Err(scene("bodies", "the scene has no bodies".into()));
+        }
+        finite3(&self.gravity).map_err(|p| scene("gravity", p))?;
+        positive(self.duration).map_err(|p| scene("duration", p))?;
+        positive(self.collision_epsilon).map_err(|p| scene("collision_epsilon", p))?;
+        positive(self.output_rate).map_err(|p| scene("output_rate", p))?;
+        if self.output_rate * self.duration > MAX_FRAMES {
+            return Err(scene(
+                "output_rate",
+                format!(
+                    "{} frames/s over {} s is more than {MAX_FRAMES:e} frames",
+                    self.output_rate, self.duration
+                ),
+            ));
+        }
+        positive(self.accuracy.rotation_tolerance)
+            .map_err(|p| scene("accuracy.rotation_tolerance", p))?;
+        positive(self.accuracy.collision_tolerance)
+            .map_err(|p| scene("accuracy.collision_tolerance", p))?;
+        check_contact(
+            self.default_contact.friction,
+            self.default_contact.restitution,
+        )
+        .map_err(|(f, p)| scene(&format!("default_contact.{f}"), p))?;
+        let mut materials: Vec<&str> = vec!["default"];
+        for b in &self.bodies {
+            if !materials.contains(&b.material.as_str()) {
+                materials.push(&b.material);
+            }
+        }
+        for (k, c) in self.contacts.iter().enumerate() {
+            let what = format!("contacts[{k}] ({} / {})", c.a, c.b);
+            check_contact(c.friction, c.restitution).map_err(|(f, p)| SimError::Invalid {
+                what: what.clone(),
+                field: f.into(),
+                problem: p,
+            })?;
+            for (field, m) in [("a", &c.a), ("b", &c.b)] {
+                if !materials.contains(&m.as_str()) {
+                    return Err(SimError::Invalid {
+                        what,
+                        field: field.into(),
+                        problem: format!("no body uses material \"{m}\""),
+                    });
+                }
+            }
+        }
+        let mut names: Vec<&str> = Vec::with_capacity(self.bodies.len());
+        for (k, b) in self.bodies.iter().enumerate() {
+            let what = if b.name.is_empty() {
+                format!("body #{k}")
+            } else {
+                format!("body \"{}\"", b.name)
+            };
+            let bad = |field: &str, problem: String| SimError::Invalid {
+                what: what.clone(),
+                field: field.into(),
+                problem,
+            };
+            if b.name.is_empty() {
+                return Err(bad("name", "is empty".into()));
+            }
+            if names.contains(&b.name.as_str()) {
+                return Err(bad("name", "another body has the same name".into()));
+            }
+            names.push(&b.name);
+            finite3(&b.position).map_err(|p| bad("position", p))?;
+            finite3(&b.velocity).map_err(|p| bad("velocity", p))?;
+            finite3(&b.angular_velocity).map_err(|p| bad("angular_velocity", p))?;
+            check_rotation(&b.rotation).map_err(|p| bad("rotation", p))?;
+            check_shape(&b.shape, true).map_err(|(f, p)| bad(&format!("shape.{f}"), p))?;
+            match b.mass {
+                Some(MassDesc::Density(d)) => positive(d).map_err(|p| bad("mass.Density", p))?,
+                Some(MassDesc::Mass(m)) => positive(m).map_err(|p| bad("mass.Mass", p))?,
+                None => {}
+            }
+            match b.motion {
+                MotionDesc::Dynamic | MotionDesc::Fixed => {}
+                MotionDesc::Spinner { axis, rate } => {
+                    nonzero3(&axis).map_err(|p| bad("motion.axis", p))?;
+                    finite(rate).map_err(|p| bad("motion.rate", p))?;
+                }
+                MotionDesc::Oscillator {
+                    axis,
+                    amplitude,
+                    frequency,
+                    phase,
+                } => {
+                    nonzero3(&axis).map_err(|p| bad("motion.axis", p))?;
+                    non_negative(amplitude).map_err(|p| bad("motion.amplitude", p))?;
+                    non_negative(frequency).map_err(|p| bad("motion.frequency", p))?;
+                    finite(phase).map_err(|p| bad("motion.phase", p))?;
+                }
+            }
+            if !matches!(b.motion, MotionDesc::Dynamic)
+                && (b.velocity != [0.0; 3] || b.angular_velocity != [0.0; 3])
+            {
+                return Err(bad(
+                    "velocity",
+                    "only dynamic bodies take an initial velocity (scripted motion sets its own)"
+                        .into(),
+                ));
+            }
+        }
+        let extent = self
+            .bodies
+            .iter()
+            .map(|b| shape_extent(&b.shape))
+            .fold(0.0, f64::max);
+        if self.collision_epsilon < MIN_EPSILON_REL * extent {
+            return Err(scene(
+                "collision_epsilon",
+                format!(
+                    "{:e} is below {MIN_EPSILON_REL:e} × the largest body size {extent:e}: \
+                     distances are not that accurate (use 1e-3 to 1e-2 of the body sizes)",
+                    self.collision_epsilon
+                ),
+            ));
+        }
+        if !self.bodies.iter().any(|b| b.motion == MotionDesc::Dynamic) {
+            return Err(scene(
+                "bodies",
+                "no body is dynamic: nothing would move".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Scene {
+    /// Reads and parses a scene file (not yet validated).
+    ///
+    /// # Errors
+    /// [`SimError::Io`] when the file cannot be read, [`SimError::Parse`] when it is not a
+    /// scene.
+    pub fn read(path: &Path) -> Result<Self, SimError> {
+        let text = std::fs::read_to_string(path).map_err(|e| SimError::Io {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        let desc = SceneDesc::from_ron(&text, &path.display().to_string())?;
+        Ok(Self {
+            desc,
+            base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        })
+    }
+
+    /// A scene from a description whose relative paths resolve against `base_dir`.
+    #[must_use]
+    pub fn new(desc: SceneDesc, base_dir: impl Into<PathBuf>) -> Self {
+        Self {
+            desc,
+            base_dir: base_dir.into(),
+        }
+    }
+}
+
+fn finite(x: f64) -> Result<(), String> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(format!("{x} is not a finite number"))
+    }
+}
+
+fn positive(x: f64) -> Result<(), String> {
+    if x.is_finite() && x > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{x} must be finite and > 0"))
+    }
+}
+
+fn non_negative(x: f64) -> Result<(), String> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{x} must be finite and ≥ 0"))
+    }
+}
+
+fn finite3(v: &[f64; 3]) -> Result<(), String> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(format!("{v:?} has a component that is not a finite number"))
+    }
+}
+
+fn nonzero3(v: &[f64; 3]) -> Result<(), String> {
+    finite3(v)?;
+    if v.iter().any(|&x| x != 0.0) {
+        Ok(())
+    } else {
+        Err("the axis is the zero vector".into())
+    }
+}
+
+fn check_rotation(r: &RotationDesc) -> Result<(), String> {
+    match r {
+        RotationDesc::Identity => Ok(()),
+        RotationDesc::AxisAngle { axis, degrees } => {
+            nonzero3(axis)?;
+            finite(*degrees)
+        }
+        RotationDesc::Quaternion(q) => {
+            if q.iter().all(|x| x.is_finite()) && q.iter().any(|&x| x != 0.0) {
+                Ok(())
+            } else {
+                Err(format!("quaternion {q:?} is not finite and non-zero"))
+            }
+        }
+    }
+}
+
+/// A rough size of a (validated) shape: its largest half extent, radius or coordinate. Used
+/// only to judge ε_c; an OBJ file counts as 0 (not read here).
+fn shape_extent(s: &ShapeDesc) -> f64 {
+    match s {
+        ShapeDesc::Sphere { radius } | ShapeDesc::GeodesicSphere { radius, .. } => *radius,
+        ShapeDesc::Box { half_extents } => half_extents.iter().copied().fold(0.0, f64::max),
+        ShapeDesc::Prism {
+            radius,
+            half_height,
+            ..
+        } => radius.max(*half_height),
+        ShapeDesc::Hull { points } => points.iter().flatten().map(|x| x.abs()).fold(0.0, f64::max),
+        ShapeDesc::Obj { .. } => 0.0,
+        ShapeDesc::Compound { parts } => parts
+            .iter()
+            .map(|p| {
+                shape_extent(&p.shape) + p.position.iter().map(|x| x.abs()).fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max),
+    }
+}
+
+fn check_contact(friction: f64, restitution: f64) -> Result<(), (&'static str, String)> {
+    non_negative(friction).map_err(|p| ("friction", p))?;
+    if !(restitution.is_finite() && (0.0..=1.0).contains(&restitution)) {
+        return Err(("restitution", format!("{restitution} must lie in [0, 1]")));
+    }
+    Ok(())
+}
+
+fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
+    let err = |f: &str, p: String| (f.to_string(), p);
+    match s {
+        ShapeDesc::Sphere { radius } => positive(*radius).map_err(|p| err("radius", p)),
+        ShapeDesc::Box { half_extents } => {
+            for x in half_extents {
+                positive(*x).map_err(|p| err("half_extents", p))?;
+            }
+            Ok(())
+        }
+        ShapeDesc::GeodesicSphere { radius, level } => {
+            positive(*radius).map_err(|p| err("radius", p))?;
+            if (1..=7).contains(level) {
+                Ok(())
+            } else {
+                Err(err("level", format!("{level} must lie in 1..=7")))
+            }
+        }
+        ShapeDesc::Prism {
+            sides,
+            radius,
+            half_height,
+        } => {
+            if *sides < 3 {
+                return Err(err("sides", format!("{sides} must be ≥ 3")));
+            }
+            positive(*radius).map_err(|p| err("radius", p))?;
+            positive(*half_height).map_err(|p| err("half_height", p))
+        }
+        ShapeDesc::Hull { points } => {
+            if points.len() < 4 {
+                return Err(err(
+                    "points",
+                    format!("{} points cannot enclose a volume (need ≥ 4)", points.len()),
+                ));
+            }
+            for (k, p) in points.iter().enumerate() {
+                finite3(p).map_err(|e| err(&format!("points[{k}]"), e))?;
+            }
+            Ok(())
+        }
+        ShapeDesc::Obj { path } => {
+            if path.is_empty() {
+                Err(err("path", "is empty".into()))
+            } else {
+                Ok(())
+            }
+        }
+        ShapeDesc::Compound { parts } => {
+            if !top {
+                return Err(err("parts", "a part cannot itself be a compound".into()));
+            }
+            if parts.is_empty() {
+                return Err(err("parts", "a compound needs at least one part".into()));
+            }
+            for (k, part) in parts.iter().enumerate() {
+                finite3(&part.position).map_err(|e| err(&format!("parts[{k}].position"), e))?;
+                check_rotation(&part.rotation)
+                    .map_err(|e| err(&format!("parts[{k}].rotation"), e))?;
+                check_shape(&part.shape, false)
+                    .map_err(|(f, e)| (format!("parts[{k}].shape.{f}"), e))?;
+            }
+            Ok(())
+        }
+    }
+}

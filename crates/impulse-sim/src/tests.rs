@@ -1,0 +1,104 @@
+//! World-level tests against closed forms and conservation laws.
+
+use glam::DVec3;
+
+use crate::{Scene, SceneDesc, World, run};
+
+fn world(ron: &str) -> World {
+    let desc = SceneDesc::from_ron(ron, "test").unwrap();
+    World::from_scene(&Scene::new(desc, ".")).unwrap()
+}
+
+/// A frictionless ball dropped from rest at height h above a fixed floor, e = 0.8: the first
+/// impact happens at t₁ = √(2h/g) (within the ε_c envelope), the rebound speed is e·√(2gh)
+/// (frictionless central collision: Stronge = Newton), so the first apex is e²·h above the
+/// floor and the second impact comes 2·e·√(2h/g) later.
+#[test]
+fn ball_drop_bounces_to_e_squared_height() {
+    let (h, e, g, r, eps): (f64, f64, f64, f64, f64) = (1.0, 0.8, 9.81, 0.1, 1e-5);
+    let ron = format!(
+        "Scene(gravity: (0, 0, -{g}), duration: 2.0, collision_epsilon: {eps},
+          default_contact: Contact(friction: 0.0, restitution: {e}),
+          bodies: [
+            Body(name: \"floor\", shape: Box(half_extents: (1, 1, 0.5)), position: (0, 0, -0.5), motion: Fixed),
+            Body(name: \"ball\", shape: Sphere(radius: {r}), position: (0, 0, {z}), mass: Density(1000.0)),
+          ])",
+        z = h + r
+    );
+    let mut w = world(&ron);
+    let t1 = (2.0 * h / g).sqrt();
+    // Just before impact: still falling at √(2g(h − ε))…
+    w.step_until(t1 - 1e-3).unwrap();
+    assert_eq!(w.counters().collisions, 0);
+    w.step_until(t1 + 1e-3).unwrap();
+    let c = w.counters();
+    assert_eq!(c.collisions, 1, "{c:?}");
+    let b = w.body_index("ball").unwrap();
+    // Apex: v_z = 0 at t1 + e·√(2h/g).
+    let t_apex = t1 + e * t1;
+    w.step_until(t_apex).unwrap();
+    let ball = &w.bodies()[b];
+    let apex = ball.pose.translation.z - r;
+    // The impact happens within ε_c of the floor, so heights and times carry O(ε_c) errors.
+    assert!(
+        (apex - e * e * h).abs() < 10.0 * eps,
+        "apex {apex} vs {}",
+        e * e * h
+    );
+    assert!(
+        ball.velocity.z.abs() < 1e-3,
+        "v_z at apex {}",
+        ball.velocity.z
+    );
+    assert!(c.min_distance > 0.0, "touching: {c:?}");
+}
+
+/// Two equal balls, central frictionless collision without gravity (validation V9):
+/// v₁′ = v₀(1 − e)/2, v₂′ = v₀(1 + e)/2.
+#[test]
+fn two_ball_central_collision() {
+    let (v0, e) = (2.0, 0.6);
+    let ron = format!(
+        "Scene(gravity: (0, 0, 0), duration: 1.0, collision_epsilon: 1e-6,
+          default_contact: Contact(friction: 0.0, restitution: {e}),
+          bodies: [
+            Body(name: \"a\", shape: Sphere(radius: 0.1), position: (0, 0, 0), velocity: ({v0}, 0, 0)),
+            Body(name: \"b\", shape: Sphere(radius: 0.1), position: (0.5, 0, 0)),
+          ])"
+    );
+    let mut w = world(&ron);
+    w.step_until(1.0).unwrap();
+    let (a, b) = (&w.bodies()[0], &w.bodies()[1]);
+    assert_eq!(w.counters().collisions, 1);
+    let (va, vb) = (v0 * (1.0 - e) / 2.0, v0 * (1.0 + e) / 2.0);
+    assert!(
+        (a.velocity - DVec3::X * va).length() < 1e-6 * v0,
+        "{}",
+        a.velocity
+    );
+    assert!(
+        (b.velocity - DVec3::X * vb).length() < 1e-6 * v0,
+        "{}",
+        b.velocity
+    );
+}
+
+/// Recording at a frame rate gives the frames asked for, and two runs give the same hash.
+#[test]
+fn recording_is_deterministic_across_thread_counts() {
+    let ron = "Scene(gravity: (0, 0, -9.81), duration: 0.5, collision_epsilon: 1e-4,
+          bodies: [
+            Body(name: \"floor\", shape: Box(half_extents: (1, 1, 0.5)), position: (0, 0, -0.5), motion: Fixed),
+            Body(name: \"cube\", shape: Box(half_extents: (0.05, 0.08, 0.1)), position: (0, 0, 0.3),
+                 rotation: AxisAngle(axis: (1, 2, 3), degrees: 40), angular_velocity: (3, -2, 5)),
+          ])";
+    let mut hashes = Vec::new();
+    for threads in [1, 2] {
+        let mut w = world(ron);
+        w.set_threads(threads).unwrap();
+        let rec = run(&mut w, 0.5, 100.0, |_| {}).unwrap();
+        assert_eq!(rec.frames.len(), 51);
+        hashes.push(rec.hash());
+    }
+    assert_eq!(hashes[0], hashes[1]);
+}
