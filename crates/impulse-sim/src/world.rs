@@ -24,7 +24,7 @@
 
 use glam::DVec3;
 use impulse_broadphase::{BroadphaseError, CoherentHash, DEFAULT_ALPHA, DEFAULT_BETA, Levels};
-use impulse_collide::{CollisionHeap, PairCache, shape, toi};
+use impulse_collide::{Closest, CollisionHeap, FeaturePair, Motion, PairCache, shape, toi};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
@@ -111,9 +111,25 @@ pub struct ContactEvent {
 /// Per-pair state kept between checks.
 #[derive(Clone, Debug, Default)]
 struct PairState {
-    cache: PairCache,
-    /// Last contact normal seen (world, from the second body toward the first).
+    /// Cached closest features of every piece pair (coherence), `[i * pieces_b + j]`.
+    features: Vec<FeaturePair>,
+    /// Last contact normal seen per piece pair (world, from the second body toward the first).
+    normals: Vec<Option<DVec3>>,
+}
+
+/// The result of checking a pair: the closest piece pair, and the distance and normal of
+/// every piece pair examined (for the time-of-impact bound, eq. 2.1).
+struct Scan {
+    /// Smallest distance (0 when touching or penetrating).
+    distance: f64,
+    /// Closest point on the first body (world).
+    point_a: DVec3,
+    /// Closest point on the second body (world).
+    point_b: DVec3,
+    /// Contact normal of the closest piece pair, from the second body toward the first.
     normal: Option<DVec3>,
+    /// Smallest key of the piece pairs other than the closest one (absolute time).
+    others_key: f64,
 }
 
 /// A simulated world.
@@ -523,66 +539,137 @@ impl World {
         Ok(())
     }
 
-    /// Closest points of a pair now; returns (distance, point on a, point on b, normal from
-    /// b toward a if known).
-    fn query(&mut self, (a, b): (u32, u32)) -> (f64, DVec3, DVec3, Option<DVec3>) {
+    /// Checks a pair now, piece pair by piece pair (thesis eq. 2.1): the closest piece pair
+    /// decides contact, and every piece pair gets its own time-of-impact bound along its own
+    /// separating direction, since a non-convex body can approach another at several places in
+    /// different directions. Piece pairs whose bounding spheres cannot come within reach
+    /// before the smallest bound so far are skipped (for fixed and ballistic bodies, whose
+    /// speed has a direction-free bound).
+    fn query(&mut self, (a, b): (u32, u32)) -> Scan {
         let (ba, bb) = (&self.bodies[a as usize], &self.bodies[b as usize]);
+        let (pieces_a, pieces_b) = (ba.shape.pieces(), bb.shape.pieces());
+        let (na, nb) = (pieces_a.len(), pieces_b.len());
+        let (motion_a, motion_b) = (ba.motion(self.gravity), bb.motion(self.gravity));
+        let free = free_bound(ba, &motion_a).zip(free_bound(bb, &motion_b));
         let state = self.pairs.entry((a, b)).or_default();
-        let c = shape::closest(&ba.shape, &ba.pose, &bb.shape, &bb.pose, &mut state.cache);
-        self.counters.pair_checks += 1;
-        let cl = c.closest;
-        let d = if cl.penetrating { 0.0 } else { cl.distance };
-        if let Some(dir) = cl.direction() {
-            state.normal = Some(-dir);
+        if state.features.len() != na * nb {
+            state.features = vec![FeaturePair::default(); na * nb];
+            state.normals = vec![None; na * nb];
         }
+        // Piece pairs by increasing bounding-sphere lower bound on their distance.
+        let mut order: Vec<(f64, usize, usize)> = Vec::with_capacity(na * nb);
+        for (i, pa) in pieces_a.iter().enumerate() {
+            let ca = ba.pose.transform_point(pa.center);
+            for (j, pb) in pieces_b.iter().enumerate() {
+                let lb = ca.distance(bb.pose.transform_point(pb.center)) - pa.radius - pb.radius;
+                order.push((lb, i, j));
+            }
+        }
+        order.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+        let mut best: Option<(f64, Closest, usize)> = None;
+        let mut keys: Vec<(usize, f64)> = Vec::with_capacity(order.len());
+        let mut min_key = f64::INFINITY;
+        let mut checks = 0u64;
+        for &(lb, i, j) in &order {
+            if let Some(((a1, b1), (a2, b2))) = free {
+                let gap = target_gap(lb, self.eps_c);
+                let reach = best.as_ref().is_none_or(|bst| lb < bst.0);
+                if gap > 0.0
+                    && !reach
+                    && self.time + toi::pair_toi(gap, (a1, b1), (a2, b2)) >= min_key
+                {
+                    continue;
+                }
+            }
+            let (pa, pb) = (&pieces_a[i], &pieces_b[j]);
+            let slot = i * nb + j;
+            let c = shape::convex_closest(
+                &pa.convex,
+                &(ba.pose * pa.pose),
+                &pb.convex,
+                &(bb.pose * pb.pose),
+                state.features[slot],
+            );
+            checks += 1;
+            state.features[slot] = c.features;
+            if let Some(dir) = c.direction() {
+                state.normals[slot] = Some(-dir);
+            }
+            let d = if c.penetrating { 0.0 } else { c.distance };
+            let key = match state.normals[slot] {
+                None => self.time,
+                Some(n) => {
+                    self.time
+                        + piece_toi(
+                            d, n, self.eps_c, false, &motion_a, ba.r_max, &motion_b, bb.r_max,
+                        )
+                }
+            };
+            min_key = min_key.min(key);
+            keys.push((slot, key));
+            if best.as_ref().is_none_or(|bst| d < bst.0) {
+                best = Some((d, c, slot));
+            }
+        }
+        self.counters.pair_checks += checks.max(1);
+        let Some((d, c, slot)) = best else {
+            unreachable!("a shape has at least one piece")
+        };
+        let others_key = keys
+            .iter()
+            .filter(|(s, _)| *s != slot)
+            .map(|(_, k)| *k)
+            .fold(f64::INFINITY, f64::min);
+        let normal = state.normals[slot];
         if d <= 0.0 {
             self.counters.touching_checks += 1;
             let depth = penetration_depth(ba, bb);
             self.counters.max_penetration = self.counters.max_penetration.max(depth);
         }
         self.counters.min_distance = self.counters.min_distance.min(d);
-        (d, cl.point_a, cl.point_b, state.normal)
+        Scan {
+            distance: d,
+            point_a: c.point_a,
+            point_b: c.point_b,
+            normal,
+            others_key,
+        }
     }
 
     /// A check plus a conservative time-of-impact bound (absolute time); no response. Used
     /// for pairs that are not at the top of the heap (new pairs, re-keyed pairs).
     fn bound(&mut self, pair: (u32, u32)) -> f64 {
-        let (d, _, _, normal) = self.query(pair);
-        self.key_for(pair, d, normal, false)
+        let scan = self.query(pair);
+        self.key_for(pair, &scan, false)
     }
 
-    /// The key of a pair at distance `d`: when it could first close the gap to the target
-    /// (module documentation). Only a pair just checked at the top of the heap (`at_top`)
-    /// gets the gap floor, which guarantees progress; elsewhere the bound stays
-    /// conservative, so a pair re-keyed while touching comes back to the top at once.
-    fn key_for(&self, (a, b): (u32, u32), d: f64, normal: Option<DVec3>, at_top: bool) -> f64 {
-        let Some(n) = normal else {
+    /// The key of a pair: the earliest time any of its piece pairs could close the gap to the
+    /// target (module documentation). Only the closest piece pair of a pair just checked at
+    /// the top of the heap (`at_top`) gets the gap floor, which guarantees progress;
+    /// elsewhere the bound stays conservative, so a pair re-keyed while touching comes back
+    /// to the top at once.
+    fn key_for(&self, (a, b): (u32, u32), scan: &Scan, at_top: bool) -> f64 {
+        let Some(n) = scan.normal else {
             return self.time; // touching with no known normal: check again now.
         };
-        let mut gap = if d > self.eps_c {
-            d - TOI_TARGET_FRACTION * self.eps_c
-        } else {
-            0.5 * d
-        };
-        if at_top {
-            gap = gap.max(GAP_FLOOR_FRACTION * self.eps_c);
-        }
         let (ba, bb) = (&self.bodies[a as usize], &self.bodies[b as usize]);
-        // d̂ points from body a toward body b: the opposite of the normal.
-        let tau = toi::toi_lower_bound(
-            gap,
-            -n,
+        let tau = piece_toi(
+            scan.distance,
+            n,
+            self.eps_c,
+            at_top,
             &ba.motion(self.gravity),
             ba.r_max,
             &bb.motion(self.gravity),
             bb.r_max,
         );
-        self.time + tau
+        (self.time + tau).min(scan.others_key)
     }
 
     /// Checks the top pair, resolves a collision, re-keys, and applies the hysteresis rule.
     fn check_top(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
-        let (d, pa, pb, normal) = self.query(pair);
+        let scan = self.query(pair);
+        let (d, pa, pb, normal) = (scan.distance, scan.point_a, scan.point_b, scan.normal);
         let mut hit = false;
         if d < self.eps_c {
             let Some(n) = normal else {
@@ -665,10 +752,10 @@ impl World {
             }
         }
         let key = if hit {
-            let (d, _, _, normal) = self.query(pair);
-            self.key_for(pair, d, normal, true)
+            let scan = self.query(pair);
+            self.key_for(pair, &scan, true)
         } else {
-            self.key_for(pair, d, normal, true)
+            self.key_for(pair, &scan, true)
         };
         let still_close = self.hash.is_close(pair.0, pair.1).unwrap_or(false);
         self.heap
@@ -717,6 +804,52 @@ impl World {
             }
         }
         Ok(())
+    }
+}
+
+/// The gap a time-of-impact bound aims to close for a piece pair at distance `d`: down to
+/// [`TOI_TARGET_FRACTION`]·ε_c when farther than ε_c, else half the distance.
+fn target_gap(d: f64, eps_c: f64) -> f64 {
+    if d > eps_c {
+        d - TOI_TARGET_FRACTION * eps_c
+    } else {
+        0.5 * d
+    }
+}
+
+/// Time (s from now) before which a piece pair at distance `d` with contact normal `n` (from
+/// the second body toward the first) cannot close its target gap; with `at_top`, the gap is
+/// at least [`GAP_FLOOR_FRACTION`]·ε_c.
+#[allow(clippy::too_many_arguments)]
+fn piece_toi(
+    d: f64,
+    n: DVec3,
+    eps_c: f64,
+    at_top: bool,
+    motion_a: &Motion,
+    r_a: f64,
+    motion_b: &Motion,
+    r_b: f64,
+) -> f64 {
+    let mut gap = target_gap(d, eps_c);
+    if at_top {
+        gap = gap.max(GAP_FLOOR_FRACTION * eps_c);
+    }
+    // d̂ points from body a toward body b: the opposite of the normal.
+    toi::toi_lower_bound(gap, -n, motion_a, r_a, motion_b, r_b)
+}
+
+/// Direction-free TOI coefficients `(A, B)` of a body: along any unit direction, no point of
+/// it moves more than `A·τ² + B·τ` in time τ. Fixed: `(0, 0)`; ballistic: `(½|g|, |v| +
+/// r_max·ω_max)` (eqs. 2.2, 2.3 with |d̂| = 1); scripted bodies: `None` (no pruning).
+fn free_bound(body: &Body, motion: &Motion) -> Option<(f64, f64)> {
+    match motion {
+        Motion::Fixed { .. } => Some((0.0, 0.0)),
+        Motion::Ballistic(m) => Some((
+            0.5 * m.gravity().length(),
+            m.velocity().length() + body.r_max * m.omega_max(),
+        )),
+        _ => None,
     }
 }
 

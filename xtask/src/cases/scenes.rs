@@ -36,6 +36,11 @@ const POOL_MOMENTUM_REL: f64 = 1e-9;
 const POOL_ENERGY_REL: f64 = 1e-12;
 /// V16: a domino has toppled when its long axis leans more than this from the vertical.
 const TOPPLE_DEGREES: f64 = 45.0;
+/// V11: a ball–ball contact has a mean gap below this many ε_c (digest: 2; microcollisions
+/// keep resting balls 1–5 ε_c apart on average, see `v11_dish`).
+const DISH_CONTACT_GAP_EPS: f64 = 10.0;
+/// V11: the six outer balls lie 60° ± this apart around the centre ball (digest ±5°).
+const DISH_BEARING_DEGREES: f64 = 5.0;
 /// V17: a coin lies flat when its axis is within this many degrees of the vertical: the
 /// digest's 5°, plus the lean of a coin whose rim rests on another coin (asin(1.75 mm /
 /// 24 mm) = 4.2°), which is a legitimate final state (seen here: one coin at 5.6°).
@@ -107,6 +112,13 @@ pub fn scene_checks() -> Vec<SceneCheck> {
             event_log: false,
             thesis: Some(("part feeder chute", 6.6)),
             metrics: feeder_chute,
+        },
+        SceneCheck {
+            case: "V11-balls-in-dish",
+            scene: "balls-in-dish",
+            event_log: false,
+            thesis: Some(("balls in dish", 2.4)),
+            metrics: v11_dish,
         },
         SceneCheck {
             case: "V6-block-on-ramp",
@@ -251,6 +263,11 @@ pub fn cases() -> Vec<Case> {
             name: "feeder-chute",
             description: "six non-convex caps slide down a converging chute: all reach the floor and stop, no interpenetration",
             run: || run_check("feeder-chute"),
+        },
+        Case {
+            name: "V11-balls-in-dish",
+            description: "seven balls dropped into a dish end as one at the centre and six around at 60°, with exactly 12 ball–ball (mean gap < 10ε_c over 0.5 s) and 7 ball–dish contacts (gap < 2ε_c), at rest",
+            run: || run_check("V11-balls-in-dish"),
         },
         Case {
             name: "determinism-threads",
@@ -834,6 +851,109 @@ fn feeder_chute(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
         Metric::new(
             "max_mean_speed_rel",
             mean_speed / v_slide,
+            0.0,
+            Check::Between(0.0, REST_REL),
+        ),
+        no_penetration(world, rec),
+    ])
+}
+
+fn v11_dish(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
+    let dish = body(world, "dish")?;
+    let balls: Vec<usize> = (0..world.bodies().len()).filter(|&i| i != dish).collect();
+    let r = 0.02;
+    let eps = world.collision_epsilon();
+    let bodies = world.bodies();
+    let centre = |i: usize| bodies[i].pose.translation;
+    // Contacts. Resting contact is a train of microcollisions: two resting balls bounce apart
+    // by a few ε_c between them (measured: mean gaps 1–5 ε_c), so a ball–ball pair is in
+    // contact when its gap, averaged over the last REST_WINDOW seconds, is below
+    // DISH_CONTACT_GAP_EPS·ε_c; the nearest pair not in contact in the arrangement is
+    // 2r(√3 − 1) ≈ 1465 ε_c apart. Ball–dish: the exact final distance below 2ε_c.
+    let last = rec.frames.last().ok_or("no frames")?;
+    let window: Vec<&impulse_sim::Frame> = rec
+        .frames
+        .iter()
+        .filter(|f| f.time >= last.time - REST_WINDOW)
+        .collect();
+    let mut ball_ball = 0;
+    for (k, &i) in balls.iter().enumerate() {
+        for &j in &balls[k + 1..] {
+            let gap = window
+                .iter()
+                .map(|f| f.bodies[i].position.distance(f.bodies[j].position) - 2.0 * r)
+                .sum::<f64>()
+                / window.len() as f64;
+            if gap < DISH_CONTACT_GAP_EPS * eps {
+                ball_ball += 1;
+            }
+        }
+    }
+    let ball_dish = balls
+        .iter()
+        .filter(|&&i| {
+            let c = impulse_collide::shape::closest(
+                &bodies[dish].shape,
+                &bodies[dish].pose,
+                &bodies[i].shape,
+                &bodies[i].pose,
+                &mut impulse_collide::PairCache::default(),
+            );
+            c.closest.distance < 2.0 * eps
+        })
+        .count();
+    // The centre ball: the one nearest the axis; the others' bearings around it.
+    let axis_dist = |i: usize| centre(i).truncate().length();
+    let &mid = balls
+        .iter()
+        .min_by(|&&a, &&b| axis_dist(a).total_cmp(&axis_dist(b)))
+        .ok_or("no balls")?;
+    let mut bearings: Vec<f64> = balls
+        .iter()
+        .filter(|&&i| i != mid)
+        .map(|&i| {
+            let d = centre(i) - centre(mid);
+            d.y.atan2(d.x).to_degrees()
+        })
+        .collect();
+    bearings.sort_by(f64::total_cmp);
+    let worst_gap = bearings
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            let next = if k + 1 < bearings.len() {
+                bearings[k + 1]
+            } else {
+                bearings[0] + 360.0
+            };
+            ((next - b) - 60.0).abs()
+        })
+        .fold(0.0, f64::max);
+    let m = 7800.0 * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+    let ke_rel = last.kinetic_energy / (balls.len() as f64 * m * 9.81 * r);
+    Ok(vec![
+        Metric::new(
+            "ball_ball_contacts",
+            f64::from(ball_ball),
+            12.0,
+            Check::Exact,
+        ),
+        Metric::new("ball_dish_contacts", ball_dish as f64, 7.0, Check::Exact),
+        Metric::new(
+            "centre_ball_off_axis_over_r",
+            axis_dist(mid) / r,
+            0.0,
+            Check::Between(0.0, 0.1),
+        ),
+        Metric::new(
+            "worst_bearing_error_degrees",
+            worst_gap,
+            0.0,
+            Check::Between(0.0, DISH_BEARING_DEGREES),
+        ),
+        Metric::new(
+            "kinetic_energy_over_7mgr",
+            ke_rel,
             0.0,
             Check::Between(0.0, REST_REL),
         ),
