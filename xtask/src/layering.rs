@@ -402,7 +402,8 @@ Intro | with a pipe.
         assert_eq!(find("impulse-massprops"), Some((1, Status::Built)));
         assert_eq!(find("impulse-cli"), Some((5, Status::Built)));
         assert_eq!(find("xtask"), Some((5, Status::Built)));
-        assert_eq!(find("impulse-broadphase"), Some((1, Status::Planned)));
+        assert_eq!(find("impulse-broadphase"), Some((1, Status::Built)));
+        assert_eq!(find("impulse-reduced"), Some((3, Status::Planned)));
     }
 
     #[test]
