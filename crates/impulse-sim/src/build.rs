@@ -46,6 +46,12 @@ fn convex(shape: &ShapeDesc, base_dir: &Path) -> Result<(Convex, MassProperties)
         ShapeDesc::GeodesicSphere { radius, level } => {
             poly(primitives::geodesic_sphere(*level, *radius).map_err(|e| e.to_string())?)
         }
+        ShapeDesc::Ellipsoid { semi_axes, level } => {
+            let mesh = primitives::geodesic_sphere_mesh(*level, 1.0).map_err(|e| e.to_string())?;
+            let s = DVec3::from_array(*semi_axes);
+            let points: Vec<DVec3> = mesh.vertices().iter().map(|v| *v * s).collect();
+            poly(ConvexPolyhedron::hull(&points).map_err(|e| e.to_string())?)
+        }
         ShapeDesc::Prism {
             sides,
             radius,
@@ -123,11 +129,19 @@ pub(crate) fn body(desc: &BodyDesc, material: usize, base_dir: &Path) -> Result<
                 Some(MassDesc::Density(d)) => d,
                 Some(MassDesc::Mass(m)) => m / unit_mp.mass,
             };
-            let mp = MassProperties {
+            let solid = MassProperties {
                 mass: unit_mp.mass * scale,
                 com: unit_mp.com,
                 inertia: unit_mp.inertia * scale,
             };
+            let mut all = vec![solid];
+            for pm in &desc.point_masses {
+                all.push(
+                    MassProperties::point_mass(pm.mass, DVec3::from_array(pm.position))
+                        .map_err(|e| geometry(e.to_string()))?,
+                );
+            }
+            let mp = MassProperties::compound(&all).map_err(|e| geometry(e.to_string()))?;
             let principal = mp.principal().map_err(|e| geometry(e.to_string()))?;
             if !(principal.moments.min_element() > 0.0 && mp.mass.is_finite() && mp.mass > 0.0) {
                 return Err(geometry(format!(

@@ -58,6 +58,14 @@ fn named_errors_for_bad_values() {
         "mass",
     );
     expect_invalid(
+        &VALID.replace(
+            "mass: Mass(1.0)",
+            "mass: Mass(1.0), point_masses: [PointMass(mass: -0.1, position: (0, 0, 0))]",
+        ),
+        "body \"ball\"",
+        "point_masses[0].mass",
+    );
+    expect_invalid(
         &VALID.replace("mass: Mass(1.0)", "mass: Mass(0.0)"),
         "body \"ball\"",
         "mass",

@@ -159,6 +159,20 @@ pub struct BodyDesc {
     /// Material name (for the contact table); `"default"` if omitted.
     #[serde(default = "default_material")]
     pub material: String,
+    /// Extra point masses fixed to the body (a bead glued on a rattleback), in the shape
+    /// frame; they add mass and inertia but no geometry. Dynamic bodies only.
+    #[serde(default)]
+    pub point_masses: Vec<PointMassDesc>,
+}
+
+/// A point mass fixed to a body.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "PointMass", deny_unknown_fields)]
+pub struct PointMassDesc {
+    /// Mass (> 0).
+    pub mass: f64,
+    /// Position in the body's shape frame.
+    pub position: [f64; 3],
 }
 
 fn default_material() -> String {
@@ -238,6 +252,14 @@ pub enum ShapeDesc {
     GeodesicSphere {
         /// Circumradius.
         radius: f64,
+        /// Refinement level ≥ 1.
+        level: u32,
+    },
+    /// A polyhedral ellipsoid: the geodesic sphere of `level` (20·4^(level−1) faces) scaled
+    /// by the semi-axes.
+    Ellipsoid {
+        /// Semi-axes along x, y, z.
+        semi_axes: [f64; 3],
         /// Refinement level ≥ 1.
         level: u32,
     },
@@ -408,6 +430,17 @@ impl SceneDesc {
                 Some(MassDesc::Mass(m)) => positive(m).map_err(|p| bad("mass.Mass", p))?,
                 None => {}
             }
+            for (k, pm) in b.point_masses.iter().enumerate() {
+                positive(pm.mass).map_err(|p| bad(&format!("point_masses[{k}].mass"), p))?;
+                finite3(&pm.position)
+                    .map_err(|p| bad(&format!("point_masses[{k}].position"), p))?;
+            }
+            if !b.point_masses.is_empty() && b.motion != MotionDesc::Dynamic {
+                return Err(bad(
+                    "point_masses",
+                    "only dynamic bodies take point masses".into(),
+                ));
+            }
             match b.motion {
                 MotionDesc::Dynamic | MotionDesc::Fixed => {}
                 MotionDesc::Spinner { axis, rate } => {
@@ -553,6 +586,7 @@ fn shape_extent(s: &ShapeDesc) -> f64 {
     match s {
         ShapeDesc::Sphere { radius } | ShapeDesc::GeodesicSphere { radius, .. } => *radius,
         ShapeDesc::Box { half_extents } => half_extents.iter().copied().fold(0.0, f64::max),
+        ShapeDesc::Ellipsoid { semi_axes, .. } => semi_axes.iter().copied().fold(0.0, f64::max),
         ShapeDesc::Prism {
             radius,
             half_height,
@@ -593,6 +627,16 @@ fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
                 Ok(())
             } else {
                 Err(err("level", format!("{level} must lie in 1..=7")))
+            }
+        }
+        ShapeDesc::Ellipsoid { semi_axes, level } => {
+            for x in semi_axes {
+                positive(*x).map_err(|p| err("semi_axes", p))?;
+            }
+            if (1..=6).contains(level) {
+                Ok(())
+            } else {
+                Err(err("level", format!("{level} must lie in 1..=6")))
             }
         }
         ShapeDesc::Prism {
