@@ -259,7 +259,7 @@ pub(crate) fn max_asymmetry(m: &DMat3) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use rand::rngs::Xoshiro256PlusPlus;
     use rand::{RngExt, SeedableRng};
@@ -268,7 +268,8 @@ mod tests {
         max_abs(&(a - b)) / max_abs(&b).max(f64::MIN_POSITIVE)
     }
 
-    fn unit(rng: &mut Xoshiro256PlusPlus) -> DVec3 {
+    /// A random unit vector (rejection sampling in the unit ball).
+    pub(crate) fn unit(rng: &mut Xoshiro256PlusPlus) -> DVec3 {
         loop {
             let v = DVec3::new(
                 rng.random_range(-1.0..1.0),

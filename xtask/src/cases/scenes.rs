@@ -339,6 +339,23 @@ fn no_penetration(world: &World, rec: &Recording) -> Metric {
     )
 }
 
+/// The largest mean speed of `bodies` over the last [`REST_WINDOW`] seconds of the run
+/// (displacement over time): "at rest" in resting contact, where microcollisions keep the
+/// instantaneous speed jittering.
+fn max_mean_speed(rec: &Recording, bodies: &[usize]) -> Result<f64, String> {
+    let last = rec.frames.last().ok_or("no frames")?;
+    let first = rec
+        .frames
+        .iter()
+        .find(|f| f.time >= last.time - REST_WINDOW)
+        .ok_or("no frames")?;
+    let span = last.time - first.time;
+    Ok(bodies
+        .iter()
+        .map(|&i| (last.bodies[i].position - first.bodies[i].position).length() / span)
+        .fold(0.0, f64::max))
+}
+
 /// Least-squares line `y = a + b·x`.
 fn fit_line(points: &[(f64, f64)]) -> (f64, f64) {
     let n = points.len() as f64;
@@ -758,19 +775,8 @@ fn v16_dominos(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
         })
         .collect();
     let in_order = times.windows(2).all(|w| w[0] < w[1]) && times.iter().all(|t| t.is_finite());
-    let last = rec.frames.last().ok_or("no frames")?;
-    let k0 = rec
-        .frames
-        .iter()
-        .position(|f| f.time >= last.time - REST_WINDOW)
-        .ok_or("no frames")?;
-    let first = &rec.frames[k0];
-    let span = last.time - first.time;
     let v_fall = (2.0f64 * 9.81 * 0.048).sqrt();
-    let mean_speed = ids
-        .iter()
-        .map(|&i| (last.bodies[i].position - first.bodies[i].position).length() / span)
-        .fold(0.0, f64::max);
+    let mean_speed = max_mean_speed(rec, &ids)?;
     Ok(vec![
         Metric::new(
             "topple_in_order",
@@ -806,18 +812,8 @@ fn v17_coins(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
                 .to_degrees()
         })
         .fold(0.0, f64::max);
-    let k0 = rec
-        .frames
-        .iter()
-        .position(|f| f.time >= last.time - REST_WINDOW)
-        .ok_or("no frames")?;
-    let first = &rec.frames[k0];
-    let span = last.time - first.time;
     let v_roll = 0.25;
-    let mean_speed = coins
-        .iter()
-        .map(|&i| (last.bodies[i].position - first.bodies[i].position).length() / span)
-        .fold(0.0, f64::max);
+    let mean_speed = max_mean_speed(rec, &coins)?;
     Ok(vec![
         Metric::new(
             "worst_tilt_degrees",
@@ -845,18 +841,8 @@ fn feeder_chute(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
         .iter()
         .filter(|&&i| last.bodies[i].position.z < 0.0)
         .count();
-    let k0 = rec
-        .frames
-        .iter()
-        .position(|f| f.time >= last.time - REST_WINDOW)
-        .ok_or("no frames")?;
-    let first = &rec.frames[k0];
-    let span = last.time - first.time;
     let v_slide = (2.0f64 * 9.81 * 0.2).sqrt();
-    let mean_speed = caps
-        .iter()
-        .map(|&i| (last.bodies[i].position - first.bodies[i].position).length() / span)
-        .fold(0.0, f64::max);
+    let mean_speed = max_mean_speed(rec, &caps)?;
     Ok(vec![
         Metric::new(
             "caps_on_floor",

@@ -38,19 +38,7 @@ fn near_v(a: DVec3, b: DVec3, tol: f64) {
     assert!((a - b).abs().max_element() <= tol, "{a} vs {b} (tol {tol})");
 }
 
-fn unit(rng: &mut Xoshiro256PlusPlus) -> DVec3 {
-    loop {
-        let v = DVec3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        );
-        let l = v.length();
-        if l > 0.1 && l < 1.0 {
-            return v / l;
-        }
-    }
-}
+use crate::body::tests::unit;
 
 /// A random SPD matrix, condition number up to ~1e3.
 fn random_spd(rng: &mut Xoshiro256PlusPlus) -> DMat3 {
