@@ -733,63 +733,68 @@ impl<'a> Integrator<'a> {
                             Outcome::Reached(_) => {}
                         }
                     }
-                    self.phase = Phase::Restitution;
-                    let end = Event {
-                        var: Var::Wz,
-                        target: wf,
-                        rising: true,
-                        kind: EventKind::End,
-                    };
-                    match self.run_segment(end, &[self.recompression()], Var::Wz)? {
-                        Outcome::Constant => {
-                            self.constant_to_wz(wf);
-                            return Ok(());
-                        }
-                        Outcome::Reached(EventKind::Recompression) => continue,
-                        Outcome::Reached(_) => return Ok(()),
-                    }
-                }
-                Restitution::Newton => {
-                    let target = -self.e * self.u0.z;
-                    self.phase = Phase::Restitution;
-                    if let Motion::Constant { .. } = self.motion {
-                        self.constant_to_uz(target);
-                        return Ok(());
-                    }
-                    let end = Event {
-                        var: Var::Uz,
-                        target,
-                        rising: true,
-                        kind: EventKind::End,
-                    };
-                    match self.run_segment(end, &[self.recompression()], Var::Uz)? {
-                        Outcome::Constant => {
-                            self.constant_to_uz(target);
-                            return Ok(());
-                        }
-                        Outcome::Reached(EventKind::Recompression) => continue,
-                        Outcome::Reached(_) => return Ok(()),
-                    }
-                }
-                Restitution::Poisson => {
-                    let target = (1.0 + self.e) * self.p_mc;
-                    self.phase = Phase::Restitution;
-                    if let Motion::Constant { .. } = self.motion {
-                        self.constant_to_pz(target);
-                        return Ok(());
-                    }
-                    let end = Event {
-                        var: Var::Pz,
-                        target,
-                        rising: true,
-                        kind: EventKind::End,
-                    };
-                    if let Outcome::Constant = self.run_segment(end, &[], Var::Pz)? {
-                        self.constant_to_pz(target);
+                    if self.restitute(Var::Wz, wf, true)? {
+                        continue;
                     }
                     return Ok(());
                 }
+                Restitution::Newton => {
+                    if self.restitute(Var::Uz, -self.e * self.u0.z, true)? {
+                        continue;
+                    }
+                    return Ok(());
+                }
+                Restitution::Poisson => {
+                    // p_z only grows: no recompression to watch for.
+                    self.restitute(Var::Pz, (1.0 + self.e) * self.p_mc, false)?;
+                    return Ok(());
+                }
             }
+        }
+    }
+
+    /// Restitution until `var` reaches `target` (the restitution law's end point), by the
+    /// closed form once the motion has a constant direction. Returns `true` when u_z fell
+    /// back to 0 first (if `watch_recompression`): the caller compresses again.
+    fn restitute(
+        &mut self,
+        var: Var,
+        target: f64,
+        watch_recompression: bool,
+    ) -> Result<bool, ResponseError> {
+        self.phase = Phase::Restitution;
+        if let Motion::Constant { .. } = self.motion {
+            self.constant_to(var, target);
+            return Ok(false);
+        }
+        let end = Event {
+            var,
+            target,
+            rising: true,
+            kind: EventKind::End,
+        };
+        let recompression = [self.recompression()];
+        let aux: &[Event] = if watch_recompression {
+            &recompression
+        } else {
+            &[]
+        };
+        match self.run_segment(end, aux, var)? {
+            Outcome::Constant => {
+                self.constant_to(var, target);
+                Ok(false)
+            }
+            Outcome::Reached(EventKind::Recompression) => Ok(true),
+            Outcome::Reached(_) => Ok(false),
+        }
+    }
+
+    /// The closed-form advance (constant direction) until `var` reaches `target`.
+    fn constant_to(&mut self, var: Var, target: f64) {
+        match var {
+            Var::Uz => self.constant_to_uz(target),
+            Var::Wz => self.constant_to_wz(target),
+            Var::Pz => self.constant_to_pz(target),
         }
     }
 
