@@ -257,8 +257,9 @@ impl CoherentHash {
     }
 
     /// Moves or resizes box `id` to `aabb`, incrementally: nothing happens for an unchanged
-    /// box, and otherwise at each level only the tiles entered and left change (new ones are written before old ones are removed, so a pair
-    /// that stays close never drops to zero on the way). If res changes, the box is removed
+    /// box, and otherwise at each level only the tiles entered and left change (new ones are
+    /// written before old ones are removed, so a pair that stays close never drops to zero on
+    /// the way). If res changes, the box is removed
     /// with its old res and stored with the new one, so counters never drift.
     ///
     /// Errors: [`BroadphaseError::UnknownId`], or a bad box as for [`insert`](Self::insert);

@@ -290,7 +290,7 @@ pub(crate) mod tests {
 
     /// A random body with principal moments of a box of random half-sizes in [0.1, 1] (moment
     /// ratios up to 1:100), random mass and orientation: (mass, world inertia).
-    fn random_body(rng: &mut Xoshiro256PlusPlus) -> (f64, DMat3) {
+    pub(crate) fn random_body(rng: &mut Xoshiro256PlusPlus) -> (f64, DMat3) {
         let m = 10f64.powf(rng.random_range(-2.0..2.0));
         let h = DVec3::new(
             rng.random_range(0.1..1.0),

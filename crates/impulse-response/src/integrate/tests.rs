@@ -38,7 +38,7 @@ fn near_v(a: DVec3, b: DVec3, tol: f64) {
     assert!((a - b).abs().max_element() <= tol, "{a} vs {b} (tol {tol})");
 }
 
-use crate::body::tests::unit;
+use crate::body::tests::{random_body, unit};
 
 /// A random SPD matrix, condition number up to ~1e3.
 fn random_spd(rng: &mut Xoshiro256PlusPlus) -> DMat3 {
@@ -110,23 +110,7 @@ fn frictionless_central_collision_matches_textbook() {
 fn frictionless_eccentric_collision_matches_textbook() {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(62);
     for _ in 0..2000 {
-        let bodies: Vec<(f64, DMat3)> = (0..2)
-            .map(|_| {
-                let m = 10f64.powf(rng.random_range(-2.0..2.0));
-                let h = DVec3::new(
-                    rng.random_range(0.1..1.0),
-                    rng.random_range(0.1..1.0),
-                    rng.random_range(0.1..1.0),
-                );
-                let d = DVec3::new(
-                    h.y * h.y + h.z * h.z,
-                    h.x * h.x + h.z * h.z,
-                    h.x * h.x + h.y * h.y,
-                ) * (m / 3.0);
-                let q = DMat3::from_axis_angle(unit(&mut rng), rng.random_range(0.0..6.3));
-                (m, q * DMat3::from_diagonal(d) * q.transpose())
-            })
-            .collect();
+        let bodies: Vec<(f64, DMat3)> = (0..2).map(|_| random_body(&mut rng)).collect();
         let ((m1, i1), (m2, i2)) = (bodies[0], bodies[1]);
         let (r1, r2) = (unit(&mut rng) * 1.2, unit(&mut rng) * 0.8);
         let n = unit(&mut rng);
