@@ -4,7 +4,7 @@
 //! - rigid motions: [`Pose`], the SE(3) exponential and logarithm, adjoints ([`pose`], [`se3`]);
 //! - spatial algebra for twists, wrenches and spatial inertias, one set of types shared by the
 //!   impulse-based and the articulated-body code ([`se3`], [`spatial`]);
-//! - shapes: the exact [`Sphere`], closed polygon meshes ([`PolyMesh`]) and convex polyhedra with
+//! - shapes: the exact [`Sphere`] and [`Ellipsoid`], closed polygon meshes ([`PolyMesh`]) and convex polyhedra with
 //!   the full feature topology a closest-features algorithm walks ([`ConvexPolyhedron`]), built
 //!   from a convex hull ([`hull`]), from explicit faces, or as primitives;
 //! - bounding volumes ([`Aabb`]) and reading/writing Wavefront OBJ meshes ([`obj`]).
@@ -19,6 +19,7 @@
 #![forbid(unsafe_code)]
 
 pub mod aabb;
+pub mod ellipsoid;
 pub mod error;
 pub mod hull;
 pub mod mesh;
@@ -33,6 +34,7 @@ pub mod sphere;
 pub mod tol;
 
 pub use aabb::Aabb;
+pub use ellipsoid::Ellipsoid;
 pub use error::GeomError;
 pub use glam::{DMat3, DMat4, DQuat, DVec3};
 pub use mesh::PolyMesh;
