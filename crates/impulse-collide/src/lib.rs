@@ -3,7 +3,8 @@
 //! **Owns** the narrow phase of collision detection (thesis chapter 2):
 //! - closest features of two convex polyhedra with coherence: V-Clip, Mirtich's robust
 //!   successor of Lin–Canny, which always terminates and reports penetration instead of cycling
-//!   ([`vclip`]); exact sphere–sphere and sphere–polyhedron distances ([`point`]); non-convex
+//!   ([`vclip`]); exact sphere–sphere and sphere–polyhedron distances ([`point`]); exact (smooth) ellipsoids
+//!   against any convex piece by GJK on support mappings ([`gjk`]); non-convex
 //!   bodies as sets of convex pieces (eq. 2.1) with a bounding hierarchy ([`shape`]);
 //! - brute-force references for all of these ([`brute`]);
 //! - time-of-impact lower bounds: the two routines every motion type supplies (swept box of the
@@ -20,6 +21,7 @@ pub mod brute;
 #[cfg(test)]
 mod conservative;
 pub mod feature;
+pub mod gjk;
 pub mod heap;
 pub mod motion;
 pub mod point;

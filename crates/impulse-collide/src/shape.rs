@@ -9,17 +9,21 @@
 //! found, so only the parts that can matter are examined exactly.
 
 use glam::DVec3;
-use impulse_geom::{Aabb, ConvexPolyhedron, Pose, Sphere};
+use impulse_geom::{Aabb, ConvexPolyhedron, Ellipsoid, Pose, Sphere};
 
 use crate::CollideError;
 use crate::feature::{Closest, Feature, FeaturePair};
+use crate::gjk::{self, SupportBody};
 use crate::{point, vclip};
 
-/// A convex piece: an exact sphere (centred on its frame's origin) or a convex polyhedron.
+/// A convex piece: an exact sphere or ellipsoid (centred on its frame's origin) or a convex
+/// polyhedron.
 #[derive(Clone, Debug)]
 pub enum Convex {
     /// Exact sphere.
     Sphere(Sphere),
+    /// Exact (smooth) ellipsoid, semi-axes along the piece frame's axes.
+    Ellipsoid(Ellipsoid),
     /// Convex polyhedron.
     Polyhedron(ConvexPolyhedron),
 }
@@ -29,6 +33,7 @@ impl Convex {
     fn bounding_sphere(&self) -> (DVec3, f64) {
         match self {
             Convex::Sphere(s) => (DVec3::ZERO, s.radius()),
+            Convex::Ellipsoid(e) => (DVec3::ZERO, e.bounding_radius(DVec3::ZERO)),
             Convex::Polyhedron(p) => {
                 let c = p.mesh().bounding_box_center();
                 (c, p.bounding_radius(c))
@@ -40,6 +45,7 @@ impl Convex {
     fn radius_about(&self, center: DVec3) -> f64 {
         match self {
             Convex::Sphere(s) => s.bounding_radius(center),
+            Convex::Ellipsoid(e) => e.bounding_radius(center),
             Convex::Polyhedron(p) => p.bounding_radius(center),
         }
     }
@@ -48,14 +54,27 @@ impl Convex {
     fn aabb(&self, pose: &Pose) -> Aabb {
         match self {
             Convex::Sphere(s) => s.aabb(pose),
+            Convex::Ellipsoid(e) => e.aabb(pose),
             Convex::Polyhedron(p) => p.aabb(pose),
         }
     }
 
-    /// Number of features, for sizing caches and statistics (a sphere has one).
+    /// The piece placed at `pose`, as a support mapping (for GJK).
+    pub fn placed<'a>(&'a self, pose: &'a Pose) -> SupportBody<'a> {
+        match self {
+            Convex::Sphere(s) => SupportBody::Sphere {
+                radius: s.radius(),
+                center: pose.translation,
+            },
+            Convex::Ellipsoid(e) => SupportBody::Ellipsoid(e, pose),
+            Convex::Polyhedron(p) => SupportBody::Polyhedron(p, pose),
+        }
+    }
+
+    /// Number of features, for sizing caches and statistics (a smooth piece has one).
     pub fn feature_count(&self) -> usize {
         match self {
-            Convex::Sphere(_) => 1,
+            Convex::Sphere(_) | Convex::Ellipsoid(_) => 1,
             Convex::Polyhedron(p) => p.vertices().len() + p.edges().len() + p.face_count(),
         }
     }
@@ -87,6 +106,14 @@ impl Shape {
     /// [`CollideError::Geom`] unless the radius is finite and positive.
     pub fn sphere(radius: f64) -> Result<Self, CollideError> {
         Ok(Self::convex(Convex::Sphere(Sphere::new(radius)?)))
+    }
+
+    /// A solid ellipsoid with `semi_axes` along the body axes, centred on the body origin.
+    ///
+    /// # Errors
+    /// [`CollideError::Geom`] unless every semi-axis is finite and positive.
+    pub fn ellipsoid(semi_axes: DVec3) -> Result<Self, CollideError> {
+        Ok(Self::convex(Convex::Ellipsoid(Ellipsoid::new(semi_axes)?)))
     }
 
     /// A convex polyhedron in the body frame.
@@ -156,7 +183,8 @@ impl Shape {
     }
 }
 
-/// Distance between two convex pieces placed in the world, warm-started from `warm`.
+/// Distance between two convex pieces placed in the world, warm-started from `warm`: exact
+/// formulas for spheres, V-Clip for polyhedra, GJK for any pair with an ellipsoid.
 pub fn convex_closest(
     a: &Convex,
     pose_a: &Pose,
@@ -165,6 +193,9 @@ pub fn convex_closest(
     warm: FeaturePair,
 ) -> Closest {
     match (a, b) {
+        (Convex::Ellipsoid(_), _) | (_, Convex::Ellipsoid(_)) => {
+            gjk::closest(&a.placed(pose_a), &b.placed(pose_b), warm)
+        }
         (Convex::Sphere(sa), Convex::Sphere(sb)) => point::sphere_sphere(
             sa.radius(),
             pose_a.translation,
@@ -364,6 +395,7 @@ mod tests {
                         any_overlap |= b.distance <= s.radius();
                         (b.distance - s.radius()).max(0.0)
                     }
+                    Convex::Ellipsoid(_) => unreachable!("the L shape has no ellipsoid"),
                 };
                 want = want.min(d);
             }
