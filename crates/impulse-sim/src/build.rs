@@ -4,7 +4,7 @@ use std::path::Path;
 
 use glam::{DQuat, DVec3};
 use impulse_collide::{Convex, Motion, Shape, motion};
-use impulse_geom::{ConvexPolyhedron, Pose, Sphere, obj, primitives};
+use impulse_geom::{ConvexPolyhedron, Ellipsoid, Pose, Sphere, obj, primitives};
 use impulse_massprops::MassProperties;
 
 use crate::body::{Body, BodyKind, Mass};
@@ -46,11 +46,24 @@ fn convex(shape: &ShapeDesc, base_dir: &Path) -> Result<(Convex, MassProperties)
         ShapeDesc::GeodesicSphere { radius, level } => {
             poly(primitives::geodesic_sphere(*level, *radius).map_err(|e| e.to_string())?)
         }
-        ShapeDesc::Ellipsoid { semi_axes, level } => {
+        ShapeDesc::Ellipsoid {
+            semi_axes,
+            level: Some(level),
+        } => {
             let mesh = primitives::geodesic_sphere_mesh(*level, 1.0).map_err(|e| e.to_string())?;
             let s = DVec3::from_array(*semi_axes);
             let points: Vec<DVec3> = mesh.vertices().iter().map(|v| *v * s).collect();
             poly(ConvexPolyhedron::hull(&points).map_err(|e| e.to_string())?)
+        }
+        ShapeDesc::Ellipsoid {
+            semi_axes,
+            level: None,
+        } => {
+            let s = DVec3::from_array(*semi_axes);
+            Ok((
+                Convex::Ellipsoid(Ellipsoid::new(s).map_err(|e| e.to_string())?),
+                MassProperties::solid_ellipsoid(s, DVec3::ZERO, 1.0).map_err(|e| e.to_string())?,
+            ))
         }
         ShapeDesc::Prism {
             sides,

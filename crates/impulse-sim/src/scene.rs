@@ -255,13 +255,15 @@ pub enum ShapeDesc {
         /// Refinement level ≥ 1.
         level: u32,
     },
-    /// A polyhedral ellipsoid: the geodesic sphere of `level` (20·4^(level−1) faces) scaled
-    /// by the semi-axes.
+    /// An ellipsoid centred on the frame origin: exact (smooth) by default, or with `level`
+    /// the polyhedron inscribed in it, the geodesic sphere of that level (20·4^(level−1)
+    /// faces) scaled by the semi-axes.
     Ellipsoid {
         /// Semi-axes along x, y, z.
         semi_axes: [f64; 3],
-        /// Refinement level ≥ 1.
-        level: u32,
+        /// Refinement level 1..=6 of a polyhedral ellipsoid; absent for the exact one.
+        #[serde(default)]
+        level: Option<u32>,
     },
     /// A right prism over a regular polygon, axis along z (a coin, a disc, a domino-like slab).
     Prism {
@@ -633,10 +635,11 @@ fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
             for x in semi_axes {
                 positive(*x).map_err(|p| err("semi_axes", p))?;
             }
-            if (1..=6).contains(level) {
-                Ok(())
-            } else {
-                Err(err("level", format!("{level} must lie in 1..=6")))
+            match level {
+                Some(l) if !(1..=6).contains(l) => {
+                    Err(err("level", format!("{l} must lie in 1..=6")))
+                }
+                _ => Ok(()),
             }
         }
         ShapeDesc::Prism {

@@ -169,3 +169,53 @@ fn ellipsoid_shape_mass_properties() {
     let rel = ((m.moments - expect) / expect).abs().max_element();
     assert!(rel < 0.02, "moments {} vs {expect}", m.moments);
 }
+
+/// The exact ellipsoid (no `level`): mass ρ·4πabc/3 and moments m(b² + c²)/5 etc. to rounding;
+/// a bad level is refused naming the field.
+#[test]
+fn exact_ellipsoid_mass_properties_and_level_validation() {
+    let (a, b, c, rho) = (0.1f64, 0.03f64, 0.02f64, 2000.0f64);
+    let scene = |level: &str| {
+        format!(
+            "Scene(gravity: (0, 0, 0), duration: 1.0, collision_epsilon: 1e-4,
+              bodies: [Body(name: \"e\", shape: Ellipsoid(semi_axes: ({a}, {b}, {c}){level}),
+                            mass: Density({rho}))])"
+        )
+    };
+    let w = world(&scene(""));
+    let m = w.bodies()[0].mass.unwrap();
+    let exact = rho * 4.0 / 3.0 * std::f64::consts::PI * a * b * c;
+    assert!((m.mass - exact).abs() < 1e-14 * exact);
+    let expect = DVec3::new(b * b + c * c, a * a + c * c, a * a + b * b) * (exact / 5.0);
+    assert!(((m.moments - expect) / expect).abs().max_element() < 1e-12);
+    let err = SceneDesc::from_ron(&scene(", level: 9"), "test")
+        .and_then(|d| d.validate())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("body \"e\""), "{err}");
+    assert!(err.contains("shape.level"), "{err}");
+}
+
+/// Penetration depth of an exact ellipsoid sunk into a box face: exactly the sinking (the
+/// face normal is a candidate axis); of an ellipsoid and a sphere overlapping along the
+/// ellipsoid's long axis: a + r − distance (the line of centres).
+#[test]
+fn ellipsoid_penetration_depth() {
+    use impulse_collide::Convex;
+    use impulse_geom::{Ellipsoid, Pose, Sphere, primitives};
+    let e = Convex::Ellipsoid(Ellipsoid::new(DVec3::new(0.1, 0.03, 0.02)).unwrap());
+    let table = Convex::Polyhedron(primitives::cuboid(DVec3::new(0.6, 0.6, 0.02)).unwrap());
+    let pt = Pose::from_translation(DVec3::new(0.0, 0.0, -0.02));
+    for sink in [0.0, 1e-6, 3e-3] {
+        let pe = Pose::new(
+            glam::DQuat::from_rotation_z(0.7),
+            DVec3::new(0.05, -0.1, 0.02 - sink),
+        );
+        let d = crate::world::support_depth(&e, &pe, &table, &pt);
+        assert!((d - sink).abs() < 1e-15, "{d} vs {sink}");
+    }
+    let s = Convex::Sphere(Sphere::new(0.05).unwrap());
+    let ps = Pose::from_translation(DVec3::new(0.14, 0.0, 0.0));
+    let d = crate::world::support_depth(&e, &Pose::IDENTITY, &s, &ps);
+    assert!((d - 0.01).abs() < 1e-15, "{d}");
+}

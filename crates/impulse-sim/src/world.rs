@@ -877,11 +877,43 @@ fn penetration_depth(a: &Body, b: &Body) -> f64 {
                 (Convex::Polyhedron(y), Convex::Sphere(x)) => {
                     sphere_depth(x.radius(), pose_b.translation, y, &pose_a)
                 }
+                (Convex::Ellipsoid(_), _) | (_, Convex::Ellipsoid(_)) => {
+                    support_depth(&pa.convex, &pose_a, &pb.convex, &pose_b)
+                }
             };
             depth = depth.max(d);
         }
     }
     depth
+}
+
+/// An upper bound on the penetration depth of two convex pieces: the smallest overlap of
+/// their projections, h_A(u) + h_B(−u), over the candidate axes u (the face normals of
+/// polyhedral pieces and the line of centres). Exact when the deepest axis is a face normal,
+/// as for a smooth body resting on a flat face.
+pub(crate) fn support_depth(
+    a: &impulse_collide::Convex,
+    pose_a: &impulse_geom::Pose,
+    b: &impulse_collide::Convex,
+    pose_b: &impulse_geom::Pose,
+) -> f64 {
+    use impulse_collide::Convex;
+    let (sa, sb) = (a.placed(pose_a), b.placed(pose_b));
+    let mut axes: Vec<DVec3> = Vec::new();
+    for (c, pose) in [(a, pose_a), (b, pose_b)] {
+        if let Convex::Polyhedron(p) = c {
+            axes.extend(p.planes().iter().map(|pl| pose.rotation * pl.normal));
+        }
+    }
+    if let Some(u) = (pose_b.translation - pose_a.translation).try_normalize() {
+        axes.push(u);
+    }
+    let overlap = |u: DVec3| sa.support_point(u).dot(u) - sb.support_point(-u).dot(u);
+    axes.into_iter()
+        .flat_map(|u| [u, -u])
+        .map(overlap)
+        .fold(f64::INFINITY, f64::min)
+        .max(0.0)
 }
 
 fn sphere_depth(

@@ -4,6 +4,8 @@
 //!
 //! - V6 block on ramp: stop time and distance against constant deceleration; creep after.
 //! - V7 sliding to rolling: t*, s*, v* of a solid ball against the closed forms.
+//! - V12 rattleback: a beaded smooth ellipsoid reverses its spin in its non-preferred
+//!   direction after 1–4 revolutions and keeps its preferred one; balanced twins stay in phase.
 //! - V9 two-ball collision: post-impact velocities against v0(1 ∓ e)/2.
 //! - V10 chain of balls: the far ball leaves at the striker's speed, the others stay.
 //! - V13 block drop: two blocks end stacked and at rest, never interpenetrating.
@@ -66,6 +68,17 @@ const REST_WINDOW: f64 = 0.5;
 /// √(2·g·ε_c): a microcollision with boosted restitution (up to e_max = 5 at full envelope
 /// depth) can send a body off at a few times that speed.
 const JITTER_MAX: f64 = 5.0;
+
+/// V12: the balanced twins' orientations may differ by at most this angle over the run
+/// (digest: < 1°).
+const TWIN_PHASE_DEGREES: f64 = 1.0;
+/// V12: revolutions the rattleback turns before its spin reverses (digest: 1–4; thesis:
+/// "approximately two").
+const REVERSAL_REVOLUTIONS: (f64, f64) = (1.0, 4.0);
+/// V12: a reversal counts when the final spin has the opposite sign and at least this fraction
+/// of the initial spin's magnitude (a real reversal, not jitter about zero); a body that must
+/// keep its direction must keep at least this fraction too.
+const SPIN_KEPT: f64 = 0.5;
 
 /// A bundled scene with its checks: `validate` runs it as bundled, `bench` at several accuracy
 /// settings.
@@ -142,6 +155,14 @@ pub fn scene_checks() -> Vec<SceneCheck> {
             event_log: false,
             thesis: None,
             metrics: v7_sliding_to_rolling,
+        },
+        SceneCheck {
+            case: "V12-rattleback",
+            headline: "revolutions_before_reversal",
+            scene: "rattleback",
+            event_log: false,
+            thesis: Some(("rattleback top", 1.2)),
+            metrics: v12_rattleback,
         },
         SceneCheck {
             case: "V8-ball-on-platter",
@@ -229,6 +250,11 @@ pub fn cases() -> Vec<Case> {
             name: "V8-ball-on-platter",
             description: "ball rolling on a platter spinning at Ω: its centre circles at 2Ω/7 (±3 %), radius drift < 5 % per orbit",
             run: || run_check("V8-ball-on-platter"),
+        },
+        Case {
+            name: "V12-rattleback",
+            description: "smooth ellipsoids spun on a table: a beaded one (skewed inertia) reverses within 1–4 revolutions in its non-preferred direction, keeps its preferred one; balanced twins stay within 1° of each other",
+            run: || run_check("V12-rattleback"),
         },
         Case {
             name: "V9-two-ball",
@@ -516,6 +542,111 @@ fn v8_platter(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             Check::Between(0.0, ORBIT_RADIUS_DRIFT),
         ),
         Metric::new("orbit_radius", r, 0.1, Check::Rel(ORBIT_RADIUS_DRIFT)),
+        no_penetration(world, rec),
+    ])
+}
+
+/// Spin about the vertical of body `b` in every frame, with the frame times.
+fn vertical_spin(rec: &Recording, b: usize) -> Vec<(f64, f64)> {
+    rec.frames
+        .iter()
+        .map(|f| (f.time, f.bodies[b].omega.z))
+        .collect()
+}
+
+/// Frames whose spin has the opposite sign of the first frame's.
+fn reversed_frames(spin: &[(f64, f64)]) -> usize {
+    let s0 = spin.first().map_or(0.0, |s| s.1);
+    spin.iter().filter(|s| s.1 * s0 < 0.0).count()
+}
+
+fn v12_rattleback(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
+    let (t1, t2) = (body(world, "twin1")?, body(world, "twin2")?);
+    let (rb, pref) = (body(world, "rattleback")?, body(world, "preferred")?);
+    // Twins: the angle of the rotation taking one's orientation to the other's.
+    let phase = rec
+        .frames
+        .iter()
+        .map(|f| {
+            let q = f.bodies[t1].rotation.inverse() * f.bodies[t2].rotation;
+            q.to_axis_angle().1.to_degrees()
+        })
+        .map(|a| if a > 180.0 { 360.0 - a } else { a })
+        .fold(0.0, f64::max);
+    // The rattleback: revolutions turned (∫|ω_z| dt, trapezoids) until its spin first
+    // changes sign.
+    let spin = vertical_spin(rec, rb);
+    let w0 = spin.first().ok_or("no frames")?.1;
+    let mut turned = 0.0;
+    let mut reversal = None;
+    for pair in spin.windows(2) {
+        let ((ta, wa), (tb, wb)) = (pair[0], pair[1]);
+        if wb * w0 < 0.0 {
+            // Up to the zero crossing, linearly interpolated.
+            let tz = ta + (tb - ta) * wa / (wa - wb);
+            turned += 0.5 * wa.abs() * (tz - ta);
+            reversal = Some(tz);
+            break;
+        }
+        turned += 0.5 * (wa.abs() + wb.abs()) * (tb - ta);
+    }
+    let revolutions = if reversal.is_some() {
+        turned / std::f64::consts::TAU
+    } else {
+        f64::INFINITY
+    };
+    let final_ratio = |b: usize| -> Result<f64, String> {
+        let s = vertical_spin(rec, b);
+        let (first, last) = (
+            s.first().ok_or("no frames")?.1,
+            s.last().ok_or("no frames")?.1,
+        );
+        Ok(last / first)
+    };
+    Ok(vec![
+        Metric::new(
+            "revolutions_before_reversal",
+            revolutions,
+            2.0,
+            Check::Between(REVERSAL_REVOLUTIONS.0, REVERSAL_REVOLUTIONS.1),
+        ),
+        Metric::new(
+            "reversal_time",
+            reversal.unwrap_or(f64::INFINITY),
+            rec.frames.last().map_or(0.0, |f| f.time),
+            Check::Between(0.0, rec.frames.last().map_or(0.0, |f| f.time)),
+        ),
+        Metric::new(
+            "rattleback_final_spin_ratio",
+            final_ratio(rb)?,
+            -1.0,
+            Check::Between(-2.0, -SPIN_KEPT),
+        ),
+        Metric::new(
+            "preferred_reversed_frames",
+            reversed_frames(&vertical_spin(rec, pref)) as f64,
+            0.0,
+            Check::Exact,
+        ),
+        Metric::new(
+            "preferred_final_spin_ratio",
+            final_ratio(pref)?,
+            1.0,
+            Check::Between(SPIN_KEPT, 1.0 + 1e-3),
+        ),
+        Metric::new(
+            "twins_reversed_frames",
+            (reversed_frames(&vertical_spin(rec, t1)) + reversed_frames(&vertical_spin(rec, t2)))
+                as f64,
+            0.0,
+            Check::Exact,
+        ),
+        Metric::new(
+            "twin_phase_degrees",
+            phase,
+            0.0,
+            Check::Between(0.0, TWIN_PHASE_DEGREES),
+        ),
         no_penetration(world, rec),
     ])
 }
