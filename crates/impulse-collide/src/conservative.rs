@@ -20,7 +20,7 @@ use rand::RngExt;
 
 use crate::feature::FeaturePair;
 use crate::motion::tests::{Tumbler, random_rotation, rng, unit_vector};
-use crate::motion::{Ballistic, Motion, omega_max_energy};
+use crate::motion::{Ballistic, Motion, alpha_max_torque_free, omega_max_energy};
 use crate::toi::toi_lower_bound;
 use crate::vclip;
 
@@ -83,6 +83,7 @@ impl Body {
         if self.fixed {
             return Motion::fixed(self.pose().translation).expect("finite");
         }
+        let alpha = alpha_max_torque_free(self.spin.inertia, self.spin.w).expect("valid");
         Motion::from(
             Ballistic::new(
                 self.pose().translation,
@@ -90,6 +91,7 @@ impl Body {
                 self.gravity,
                 self.omega_max,
             )
+            .and_then(|b| b.with_spin(self.spin.q * self.spin.w, alpha))
             .expect("valid"),
         )
     }
@@ -176,6 +178,8 @@ struct Outcome {
     /// The reference ran out of steps before reaching the TOI (inconclusive).
     stalled: bool,
     advance_steps: u32,
+    /// A body's coefficients came from the spin refinement rather than eq. 2.3.
+    refined: bool,
 }
 
 /// Checks the TOI bound of one random pair against the reference (see the module doc).
@@ -212,6 +216,15 @@ fn check_pair(
     let (a1, b1) = ma.toi_coefficients(d_hat, a.r_max, c.distance);
     let (a2, b2) = mb.toi_coefficients(-d_hat, b.r_max, c.distance);
     let promised = |t: f64| c.distance - (a1 + a2) * t * t - (b1 + b2) * t;
+    let refined = [
+        (ma, d_hat, a.r_max, (a1, b1)),
+        (mb, -d_hat, b.r_max, (a2, b2)),
+    ]
+    .iter()
+    .any(|(m, d, r_max, got)| match m {
+        Motion::Ballistic(m) => m.toi_coefficients(*d, *r_max) != *got,
+        _ => false,
+    });
     // Reference: conservative advancement with speed bounds, up to the TOI (or a horizon).
     let horizon = if toi.is_finite() { toi } else { 0.5 };
     let g_rel = if a.fixed != b.fixed {
@@ -243,6 +256,7 @@ fn check_pair(
         deficit,
         stalled: steps > ADVANCE_LIMIT,
         advance_steps: steps,
+        refined,
     })
 }
 
@@ -258,6 +272,8 @@ pub(crate) struct Run {
     pub stalled: usize,
     /// Mean reference steps per pair.
     pub mean_steps: f64,
+    /// Pairs where the spin refinement gave a body's coefficients.
+    pub refined: usize,
 }
 
 /// Runs `pairs` random pairs.
@@ -270,6 +286,7 @@ pub(crate) fn run(pairs: usize, seed: u64) -> Run {
         finite: 0,
         stalled: 0,
         mean_steps: 0.0,
+        refined: 0,
     };
     let (mut done, mut steps) = (0, 0u64);
     while done < pairs {
@@ -281,6 +298,7 @@ pub(crate) fn run(pairs: usize, seed: u64) -> Run {
         out.max_deficit = out.max_deficit.max(o.deficit);
         out.finite += o.toi.is_finite() as usize;
         out.stalled += o.stalled as usize;
+        out.refined += o.refined as usize;
         steps += u64::from(o.advance_steps);
     }
     out.mean_steps = steps as f64 / pairs as f64;
@@ -368,14 +386,20 @@ mod tests {
     fn toi_bound_is_never_later_than_first_contact() {
         let run = run(100_000, 11);
         eprintln!(
-            "violations {}, max deficit {:e} of size, finite {}, stalled {}, mean reference steps {:.1}",
-            run.violations, run.max_deficit, run.finite, run.stalled, run.mean_steps
+            "violations {}, max deficit {:e} of size, finite {}, stalled {}, mean reference steps {:.1}, spin refinement used in {}",
+            run.violations, run.max_deficit, run.finite, run.stalled, run.mean_steps, run.refined
         );
         assert_eq!(run.violations, 0);
         assert!(run.max_deficit <= DEFICIT_REL);
         // Most pairs approach; few are too slow for the reference to follow.
         assert!(run.finite > 50_000, "{} finite TOIs", run.finite);
         assert!(run.stalled * 100 < 100_000, "{} stalled", run.stalled);
+        // The spin refinement (tighter for spins along d̂) must be exercised, not just present.
+        assert!(
+            run.refined > 5_000,
+            "spin refinement used in {} pairs",
+            run.refined
+        );
     }
 
     /// A 1 mm plate and a body at 1 km/s (spinning at up to 10³ rad/s): the iterated bounds stop

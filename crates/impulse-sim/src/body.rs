@@ -226,14 +226,27 @@ impl Body {
                 com: self.pose.translation,
             }),
             BodyKind::Dynamic => {
+                let wb = self.pose.rotation.inverse() * self.omega;
                 let omega_max = self.mass.map_or(self.omega.length(), |m| {
-                    let wb = self.pose.rotation.inverse() * self.omega;
                     impulse_collide::motion::omega_max_energy(m.moments, wb)
                         .unwrap_or(f64::INFINITY)
                 });
                 // Ballistic::new only fails for non-finite input; the bound then is "check now".
-                Ballistic::new(self.pose.translation, self.velocity, gravity, omega_max)
-                    .map_or(Motion::Fixed { com: DVec3::NAN }, Motion::Ballistic)
+                let Ok(ballistic) =
+                    Ballistic::new(self.pose.translation, self.velocity, gravity, omega_max)
+                else {
+                    return Motion::Fixed { com: DVec3::NAN };
+                };
+                // The spin refinement (a top spinning about the contact normal), when the
+                // angular acceleration bound exists.
+                let alpha = self.mass.and_then(|m| {
+                    impulse_collide::motion::alpha_max_torque_free(m.moments, wb).ok()
+                });
+                Motion::Ballistic(
+                    alpha
+                        .and_then(|a| ballistic.with_spin(self.omega, a).ok())
+                        .unwrap_or(ballistic),
+                )
             }
         }
     }
