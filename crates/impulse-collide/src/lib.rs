@@ -3,14 +3,15 @@
 //! **Owns** the narrow phase of collision detection (thesis chapter 2):
 //! - closest features of two convex polyhedra with coherence: V-Clip, Mirtich's robust
 //!   successor of Lin–Canny, which always terminates and reports penetration instead of cycling
-//!   ([`vclip`]); exact sphere–sphere and sphere–polyhedron distances ([`point`]); exact (smooth) ellipsoids
-//!   against any convex piece by GJK on support mappings ([`gjk`]); non-convex
-//!   bodies as sets of convex pieces (eq. 2.1) with a bounding hierarchy ([`shape`]);
+//!   ([`vclip`]); exact sphere–sphere and sphere–polyhedron distances ([`point`]); exact
+//!   (smooth) ellipsoids against any convex piece by GJK on support mappings ([`gjk`]);
+//!   non-convex bodies as sets of convex pieces (eq. 2.1) with a bounding hierarchy
+//!   ([`shape`]);
 //! - brute-force references for all of these ([`brute`]);
 //! - time-of-impact lower bounds: the two routines every motion type supplies (swept box of the
 //!   centre of mass, TOI coefficients; eqs. 2.2–2.5, 2.13–2.15, and for ballistic bodies a
-//!   tighter spin bound from the current ω and ‖ω̇‖ ≤ ‖L‖·ω_max/I_min) for fixed, ballistic, cycler,
-//!   spinner and oscillator bodies ([`motion`]), and the pair bound ([`toi`]);
+//!   tighter spin bound from the current ω and ‖ω̇‖ ≤ ‖L‖·ω_max/I_min) for fixed, ballistic,
+//!   cycler, spinner and oscillator bodies ([`motion`]), and the pair bound ([`toi`]);
 //! - the collision heap: pairs keyed by their TOI bound, with re-keying and the hysteresis rule
 //!   of §2.4.3 ([`heap`]).
 //!
