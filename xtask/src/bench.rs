@@ -9,7 +9,8 @@
 //! `cargo xtask validate`, named in [`SceneCheck::headline`]; its value when the reference is
 //! 0), and whether all the scene's metrics pass. It writes `bench.csv` and one `<scene>.svg`
 //! (error against slowdown, log–log) per scene into the output directory (default
-//! `target/bench`).
+//! `target/bench`). Then it runs the stack study ([`crate::stacks`], also alone with
+//! `--case stacks`) and writes `stacks.csv`.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -58,6 +59,9 @@ pub const SETTINGS: [Setting; 3] = [
         collision_tolerance: 1e-12,
     },
 ];
+
+/// The `--case` name that runs only the stack study ([`crate::stacks`]).
+pub const STACKS_CASE: &str = "stacks";
 
 /// Errors below this are plotted at this value (log axis).
 const PLOT_ERROR_FLOOR: f64 = 1e-16;
@@ -122,11 +126,12 @@ pub fn run_bench(options: &Options) -> Result<()> {
         .clone()
         .unwrap_or_else(|| crate::workspace_root().join("target").join("bench"));
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let stacks_only = options.case.as_deref() == Some(STACKS_CASE);
     let checks: Vec<SceneCheck> = scene_checks()
         .into_iter()
         .filter(|c| options.case.as_deref().is_none_or(|n| n == c.case))
         .collect();
-    if checks.is_empty() {
+    if checks.is_empty() && !stacks_only {
         return Err(format!("no scene case {:?}", options.case));
     }
     println!(
@@ -179,6 +184,12 @@ pub fn run_bench(options: &Options) -> Result<()> {
             .map_err(|e| format!("{}: {e}", path.display()))?;
     }
     println!("wrote {} and one SVG per scene", csv.display());
+    if options.case.is_none() || stacks_only {
+        let path = out.join("stacks.csv");
+        std::fs::write(&path, crate::stacks::study()?)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
     Ok(())
 }
 

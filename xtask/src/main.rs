@@ -20,6 +20,7 @@ mod bench;
 mod cases;
 mod ci;
 mod layering;
+mod stacks;
 mod validate;
 
 use std::path::PathBuf;
@@ -41,7 +42,8 @@ commands:
   bench [--out DIR] [--case NAME]     speed against error: every scene at three accuracy settings
                                       in a release build; prints slowdown next to thesis Table 7.1
                                       and the error; writes bench.csv and one SVG per scene to DIR
-                                      (default target/bench)
+                                      (default target/bench); then the stack study of 1–8 blocks
+                                      (stacks.csv; alone with --case stacks)
   layering                            check crate dependencies against the layer table of
                                       docs/architecture.md
   help                                print this message
