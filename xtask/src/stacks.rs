@@ -130,16 +130,15 @@ pub fn study() -> Result<String> {
             r.top_drift,
             r.penetration_over_eps
         );
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{}",
-            r.blocks,
+        let values = [
+            r.blocks as f64,
             r.wall_per_second,
-            r.pair_checks,
-            r.impulses,
+            r.pair_checks as f64,
+            r.impulses as f64,
             r.top_drift,
-            r.penetration_over_eps
-        );
+            r.penetration_over_eps,
+        ];
+        let _ = writeln!(csv, "{}", values.map(|v| v.to_string()).join(","));
         rows.push(r);
     }
     println!(

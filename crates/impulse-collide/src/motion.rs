@@ -1338,6 +1338,28 @@ pub(crate) mod tests {
         }
     }
 
+    /// A random launch of a body with principal moments `inertia`: spin log-uniform in
+    /// [0.1, 10^max_log_spin] rad/s about a random axis from a random orientation, speed up to
+    /// `max_speed`, gravity on odd cases.
+    fn random_launch(
+        rng: &mut Xoshiro256PlusPlus,
+        case: usize,
+        inertia: DVec3,
+        max_log_spin: f64,
+        max_speed: f64,
+    ) -> (Tumbler, DVec3, DVec3) {
+        let spin = 10f64.powf(rng.random_range(-1.0..max_log_spin));
+        let w = unit_vector(rng) * spin;
+        let g = if case % 2 == 0 {
+            DVec3::ZERO
+        } else {
+            unit_vector(rng) * 9.81
+        };
+        let v0 = unit_vector(rng) * rng.random_range(0.0..max_speed);
+        let q = random_rotation(rng);
+        (Tumbler { inertia, q, w }, v0, g)
+    }
+
     /// The spin refinement: for directions near the spin axis (where it is chosen) and random
     /// ones, the coefficients returned for a small gap bound every vertex's displacement over a
     /// tumbling box's trajectory (RK4 reference), and near the axis they are tighter than
@@ -1350,19 +1372,8 @@ pub(crate) mod tests {
         for case in 0..CASES {
             let half = random_box(&mut rng);
             let inertia = box_inertia(half);
-            let spin = 10f64.powf(rng.random_range(-1.0..2.0));
-            let w0 = unit_vector(&mut rng) * spin;
-            let g = if case % 2 == 0 {
-                DVec3::ZERO
-            } else {
-                unit_vector(&mut rng) * 9.81
-            };
-            let v0 = unit_vector(&mut rng) * rng.random_range(0.0..0.5);
-            let start = Tumbler {
-                inertia,
-                q: random_rotation(&mut rng),
-                w: w0,
-            };
+            let (start, v0, g) = random_launch(&mut rng, case, inertia, 2.0, 0.5);
+            let w0 = start.w;
             let omega_max = omega_max_energy(inertia, w0).unwrap();
             let alpha = alpha_max_torque_free(inertia, w0).unwrap();
             let w_world = start.q * w0;
@@ -1446,19 +1457,8 @@ pub(crate) mod tests {
             let inertia = box_inertia(half);
             max_inertia_ratio =
                 max_inertia_ratio.max(inertia.max_element() / inertia.min_element());
-            let spin = 10f64.powf(rng.random_range(-1.0..3.0));
-            let w0 = unit_vector(&mut rng) * spin;
-            let g = if case % 2 == 0 {
-                DVec3::ZERO
-            } else {
-                unit_vector(&mut rng) * 9.81
-            };
-            let v0 = unit_vector(&mut rng) * rng.random_range(0.0..5.0);
-            let start = Tumbler {
-                inertia,
-                q: random_rotation(&mut rng),
-                w: w0,
-            };
+            let (start, v0, g) = random_launch(&mut rng, case, inertia, 3.0, 5.0);
+            let w0 = start.w;
             let omega_max = omega_max_energy(inertia, w0).unwrap();
             let traj = Trajectory::new(half, start, (DVec3::ZERO, v0, g), SPAN_ANGLE / omega_max);
             let motion = Motion::from(Ballistic::new(DVec3::ZERO, v0, g, omega_max).unwrap());
