@@ -170,6 +170,21 @@ impl Shape {
         })
     }
 
+    /// How far from `center` (body frame) rotation about it reaches on piece `index`: the
+    /// largest distance of a point whose motion can change the piece's distance to anything.
+    /// A sphere is the same set whatever it turns about its own centre, so only that centre
+    /// counts (|c − center|; zero for a ball about its centre of mass); any other piece counts
+    /// its farthest point. This replaces r_max in the rotational term of a time-of-impact
+    /// bound (eq. 2.3) for that piece. `None` for an index out of range.
+    pub fn rotational_reach(&self, index: usize, center: DVec3) -> Option<f64> {
+        let p = self.pieces.get(index)?;
+        let local = p.pose.inverse_transform_point(center);
+        Some(match &p.convex {
+            Convex::Sphere(_) => local.length(),
+            c => c.radius_about(local),
+        })
+    }
+
     /// Radius of the smallest sphere about `center` (body frame) containing the shape: r_max
     /// of thesis §2.3.2 when `center` is the centre of mass.
     pub fn bounding_radius(&self, center: DVec3) -> f64 {
@@ -437,6 +452,16 @@ mod tests {
         // r_max about the body origin: the upright bar's far corner (−1.0, 1.2, ±0.2) at √2.48
         // beats the long bar's corners (√1.08) and the sphere (√1.06 + 0.3).
         assert!((l.bounding_radius(DVec3::ZERO) - 2.48f64.sqrt()).abs() < 1e-12);
+        // Rotational reach: the sphere piece (centre (0.9, 0.5, 0)) only by its centre; the
+        // long bar by its far corner (1, 0.2, 0.2).
+        let c = DVec3::ZERO;
+        assert!((l.rotational_reach(2, c).unwrap() - 1.06f64.sqrt()).abs() < 1e-12);
+        assert!((l.rotational_reach(0, c).unwrap() - 1.08f64.sqrt()).abs() < 1e-12);
+        assert_eq!(
+            Shape::sphere(0.3).unwrap().rotational_reach(0, c),
+            Some(0.0)
+        );
+        assert_eq!(l.rotational_reach(3, c), None);
         assert!(matches!(
             Shape::compound(vec![]),
             Err(CollideError::EmptyCompound)

@@ -97,6 +97,10 @@ pub struct Body {
     pub mass: Option<Mass>,
     /// Largest distance of a body point from the centre of mass.
     pub r_max: f64,
+    /// Per piece, how far rotation about the centre of mass reaches on it (the r of the
+    /// rotational term of a time-of-impact bound; zero for a ball about its centre of mass,
+    /// see [`Shape::rotational_reach`]).
+    pub reach: Vec<f64>,
     /// Index of the body's material in the world's material table.
     pub material: usize,
     /// The prescribed motion of a scripted body, re-based at the current time.
@@ -120,6 +124,9 @@ impl Body {
         script: Option<Motion>,
     ) -> Self {
         let r_max = shape.bounding_radius(DVec3::ZERO);
+        let reach = (0..shape.pieces().len())
+            .map(|i| shape.rotational_reach(i, DVec3::ZERO).unwrap_or(r_max))
+            .collect();
         Self {
             name,
             shape,
@@ -129,10 +136,17 @@ impl Body {
             omega,
             mass,
             r_max,
+            reach,
             material,
             script,
             step_hint: 0.0,
         }
+    }
+
+    /// The largest rotational reach over the pieces (≤ r_max).
+    #[must_use]
+    pub fn max_reach(&self) -> f64 {
+        self.reach.iter().copied().fold(0.0, f64::max)
     }
 
     /// True for a dynamic (ballistic) body.

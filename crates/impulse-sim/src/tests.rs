@@ -219,3 +219,40 @@ fn ellipsoid_penetration_depth() {
     let d = crate::world::support_depth(&e, &Pose::IDENTITY, &s, &ps);
     assert!((d - 0.01).abs() < 1e-15, "{d}");
 }
+
+/// A ball released ε_c/2 above a floor and left for 5 s. A ball's distance to anything
+/// changes only with its centre, so its time-of-impact bound is exact: it is checked when it
+/// reaches contact, reversed by a microcollision (e = 1 in effect, no energy change), and
+/// checked again only when it can be back at contact. So it bounces from its release height
+/// for ever, with the free-fall period 2·√(2h/g), h = ε_c/2: the number of microcollisions is
+/// 5 s over that period, there are two checks per bounce (one at contact, one re-key), and it
+/// never sinks (penetration at rounding level), while its spin about the normal is untouched.
+#[test]
+fn resting_ball_bounces_with_the_free_fall_period() {
+    let (eps, g, t_end): (f64, f64, f64) = (1e-4, 9.81, 5.0);
+    let ron = format!(
+        "Scene(gravity: (0, 0, -{g}), duration: {t_end}, collision_epsilon: {eps},
+          default_contact: Contact(friction: 0.5, restitution: 0.0),
+          bodies: [
+            Body(name: \"floor\", shape: Box(half_extents: (1, 1, 0.5)), position: (0, 0, -0.5), motion: Fixed),
+            Body(name: \"ball\", shape: Sphere(radius: 0.1), position: (0, 0, {z}),
+                 angular_velocity: (0, 0, 3), mass: Density(1000.0)),
+          ])",
+        z = 0.1 + 0.5 * eps
+    );
+    let mut w = world(&ron);
+    w.step_until(t_end).unwrap();
+    let c = w.counters();
+    let period = 2.0 * (2.0 * 0.5 * eps / g).sqrt();
+    let bounces = t_end / period;
+    assert!(
+        (c.microcollisions as f64 - bounces).abs() <= 2.0,
+        "{} microcollisions, {bounces:.1} bounces expected",
+        c.microcollisions
+    );
+    assert_eq!(c.collisions, 0);
+    assert!(c.pair_checks as f64 <= 2.0 * bounces + 4.0, "{c:?}");
+    assert!(c.max_penetration < 1e-12 * eps, "{c:?}");
+    let b = &w.bodies()[1];
+    assert!((b.omega.z - 3.0).abs() < 1e-9, "{}", b.omega);
+}

@@ -18,9 +18,17 @@
 //! could first come within ε_c/2 ([`TOI_TARGET_FRACTION`]), so checks happen at a positive gap
 //! and bodies never interpenetrate. A pair already within ε_c but not approaching is scheduled
 //! for when it could have closed half its gap. Right after a pair is checked at the top of the
-//! heap, the gap used is never below [`GAP_FLOOR_FRACTION`]·ε_c, so the run cannot stall on a
-//! pair that touches (the price: a penetration of about that much, which the counters
-//! measure); everywhere else the bound stays conservative.
+//! heap, a pair that may be approaching gets a gap of at least [`GAP_FLOOR_FRACTION`]·ε_c, so
+//! the run cannot stall on a pair that touches (the price: a penetration of about that much,
+//! which the counters measure); a pair surely separating from contact is due when it could be
+//! back at contact, so a penetration heals instead of growing bounce by bounce; everywhere
+//! else the bound stays conservative.
+//!
+//! **Rotation in the bounds.** The rotational term of a piece pair's bound uses each piece's
+//! rotational reach ([`Body::reach`]): a ball's distance to anything moves only with its
+//! centre, so a ball about its centre of mass contributes no rotational term, and its bound
+//! is exact (thesis eq. 2.3 charges it r_max·ω_max, which made a rolling ball's checks
+//! thousands of times more frequent than its bounces).
 
 use glam::DVec3;
 use impulse_broadphase::{BroadphaseError, CoherentHash, DEFAULT_ALPHA, DEFAULT_BETA, Levels};
@@ -130,6 +138,10 @@ struct Scan {
     normal: Option<DVec3>,
     /// Smallest key of the piece pairs other than the closest one (absolute time).
     others_key: f64,
+    /// The closest piece pair (piece indices of the two bodies).
+    pieces: (usize, usize),
+    /// How deep the bodies interpenetrate when touching (an upper bound; 0 otherwise).
+    depth: f64,
 }
 
 /// A simulated world.
@@ -601,7 +613,15 @@ impl World {
                 Some(n) => {
                     self.time
                         + piece_toi(
-                            d, n, self.eps_c, false, &motion_a, ba.r_max, &motion_b, bb.r_max,
+                            d,
+                            0.0,
+                            n,
+                            self.eps_c,
+                            false,
+                            &motion_a,
+                            ba.reach[i],
+                            &motion_b,
+                            bb.reach[j],
                         )
                 }
             };
@@ -621,9 +641,10 @@ impl World {
             .map(|(_, k)| *k)
             .fold(f64::INFINITY, f64::min);
         let normal = state.normals[slot];
+        let mut depth = 0.0;
         if d <= 0.0 {
             self.counters.touching_checks += 1;
-            let depth = penetration_depth(ba, bb);
+            depth = penetration_depth(ba, bb);
             self.counters.max_penetration = self.counters.max_penetration.max(depth);
         }
         self.counters.min_distance = self.counters.min_distance.min(d);
@@ -633,6 +654,8 @@ impl World {
             point_b: c.point_b,
             normal,
             others_key,
+            pieces: (slot / nb, slot % nb),
+            depth,
         }
     }
 
@@ -655,13 +678,14 @@ impl World {
         let (ba, bb) = (&self.bodies[a as usize], &self.bodies[b as usize]);
         let tau = piece_toi(
             scan.distance,
+            scan.depth,
             n,
             self.eps_c,
             at_top,
             &ba.motion(self.gravity),
-            ba.r_max,
+            ba.reach[scan.pieces.0],
             &bb.motion(self.gravity),
-            bb.r_max,
+            bb.reach[scan.pieces.1],
         );
         (self.time + tau).min(scan.others_key)
     }
@@ -818,11 +842,17 @@ fn target_gap(d: f64, eps_c: f64) -> f64 {
 }
 
 /// Time (s from now) before which a piece pair at distance `d` with contact normal `n` (from
-/// the second body toward the first) cannot close its target gap; with `at_top`, the gap is
-/// at least [`GAP_FLOOR_FRACTION`]·ε_c.
+/// the second body toward the first) cannot close its target gap. With `at_top`, a pair that
+/// may be approaching gets a gap of at least [`GAP_FLOOR_FRACTION`]·ε_c (progress); a pair
+/// that is surely separating (its closing-speed bound is negative) keeps its own target, and
+/// from contact — interpenetrating by `depth` — it is due when it could be back at contact
+/// (or, if it cannot rise that far, back where it is). The floor alone would let each bounce
+/// of a body whose bound is exact (a ball, which rotation cannot move) end deeper, and a
+/// penetration, once made, would never heal.
 #[allow(clippy::too_many_arguments)]
 fn piece_toi(
     d: f64,
+    depth: f64,
     n: DVec3,
     eps_c: f64,
     at_top: bool,
@@ -831,23 +861,49 @@ fn piece_toi(
     motion_b: &Motion,
     r_b: f64,
 ) -> f64 {
+    // d̂ points from body a toward body b: the opposite of the normal.
+    let d_hat = -n;
     let mut gap = target_gap(d, eps_c);
     if at_top {
-        gap = gap.max(GAP_FLOOR_FRACTION * eps_c);
+        let floor = GAP_FLOOR_FRACTION * eps_c;
+        let (a1, b1) = motion_a.toi_coefficients(d_hat, r_a, gap.max(floor));
+        let (a2, b2) = motion_b.toi_coefficients(-d_hat, r_b, gap.max(floor));
+        let (a, b) = (a1 + a2, b1 + b2);
+        // Surely separating, by more than half the floor before turning back (the bound's
+        // apex b²/4a; a body reversed after falling through the floor rises to the floor), or
+        // never turning back.
+        let separating = b < 0.0 && (a <= 0.0 || b * b > 2.0 * a * floor);
+        if !separating {
+            // Possibly approaching, or barely leaving: the floor guarantees progress.
+            gap = gap.max(floor);
+        } else if gap <= 0.0 {
+            if a <= 0.0 {
+                return f64::INFINITY;
+            }
+            // Leaving contact: a·τ² + b·τ = −depth at the bound's return to contact (the
+            // later root), else its return to the current depth, τ = −b/a (at least
+            // √(2·floor/a) by the apex condition).
+            let disc = b * b - 4.0 * a * depth.max(0.0);
+            return if disc > 0.0 {
+                (-b + disc.sqrt()) / (2.0 * a)
+            } else {
+                -b / a
+            };
+        }
     }
-    // d̂ points from body a toward body b: the opposite of the normal.
-    toi::toi_lower_bound(gap, -n, motion_a, r_a, motion_b, r_b)
+    toi::toi_lower_bound(gap, d_hat, motion_a, r_a, motion_b, r_b)
 }
 
-/// Direction-free TOI coefficients `(A, B)` of a body: along any unit direction, no point of
-/// it moves more than `A·τ² + B·τ` in time τ. Fixed: `(0, 0)`; ballistic: `(½|g|, |v| +
-/// r_max·ω_max)` (eqs. 2.2, 2.3 with |d̂| = 1); scripted bodies: `None` (no pruning).
+/// Direction-free TOI coefficients `(A, B)` of a body: along any unit direction, none of its
+/// pieces closes a distance by more than `A·τ² + B·τ` in time τ. Fixed: `(0, 0)`; ballistic:
+/// `(½|g|, |v| + reach·ω_max)` (eqs. 2.2, 2.3 with |d̂| = 1, reach ≤ r_max the largest
+/// rotational reach of its pieces); scripted bodies: `None` (no pruning).
 fn free_bound(body: &Body, motion: &Motion) -> Option<(f64, f64)> {
     match motion {
         Motion::Fixed { .. } => Some((0.0, 0.0)),
         Motion::Ballistic(m) => Some((
             0.5 * m.gravity().length(),
-            m.velocity().length() + body.r_max * m.omega_max(),
+            m.velocity().length() + body.max_reach() * m.omega_max(),
         )),
         _ => None,
     }

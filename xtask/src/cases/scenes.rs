@@ -308,7 +308,7 @@ pub fn cases() -> Vec<Case> {
         },
         Case {
             name: "V11-balls-in-dish",
-            description: "seven balls dropped into a dish end as one at the centre and six around at 60°, with exactly 12 ball–ball (mean gap < 10ε_c over 0.5 s) and 7 ball–dish contacts (gap < 2ε_c), at rest",
+            description: "seven balls dropped into a dish end as one at the centre and six around at 60°, with exactly 12 ball–ball and 7 ball–dish contacts (mean gap < 10ε_c over the last 0.5 s), at rest",
             run: || run_check("V11-balls-in-dish"),
         },
         Case {
@@ -1002,7 +1002,9 @@ fn v11_dish(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
     // by a few ε_c between them (measured: mean gaps 1–5 ε_c), so a ball–ball pair is in
     // contact when its gap, averaged over the last REST_WINDOW seconds, is below
     // DISH_CONTACT_GAP_EPS·ε_c; the nearest pair not in contact in the arrangement is
-    // 2r(√3 − 1) ≈ 1465 ε_c apart. Ball–dish: the exact final distance below 2ε_c.
+    // 2r(√3 − 1) ≈ 1465 ε_c apart. Ball–dish the same way, with the exact distance to the
+    // dish (measured: final gaps 0.1–2.9 ε_c; a ball resting on the others instead of the
+    // dish would be millimetres, hundreds of ε_c, away).
     let last = rec.frames.last().ok_or("no frames")?;
     let window: Vec<&impulse_sim::Frame> = rec
         .frames
@@ -1022,17 +1024,28 @@ fn v11_dish(world: &World, rec: &Recording) -> Result<Vec<Metric>, String> {
             }
         }
     }
+    let mut cache = impulse_collide::PairCache::default();
     let ball_dish = balls
         .iter()
         .filter(|&&i| {
-            let c = impulse_collide::shape::closest(
-                &bodies[dish].shape,
-                &bodies[dish].pose,
-                &bodies[i].shape,
-                &bodies[i].pose,
-                &mut impulse_collide::PairCache::default(),
-            );
-            c.closest.distance < 2.0 * eps
+            let gap = window
+                .iter()
+                .map(|f| {
+                    let s = f.bodies[i];
+                    let pose = impulse_geom::Pose::new(s.rotation, s.position);
+                    impulse_collide::shape::closest(
+                        &bodies[dish].shape,
+                        &bodies[dish].pose,
+                        &bodies[i].shape,
+                        &pose,
+                        &mut cache,
+                    )
+                    .closest
+                    .distance
+                })
+                .sum::<f64>()
+                / window.len() as f64;
+            gap < DISH_CONTACT_GAP_EPS * eps
         })
         .count();
     // The centre ball: the one nearest the axis; the others' bearings around it.
