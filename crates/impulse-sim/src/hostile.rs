@@ -19,6 +19,8 @@ const VALID: &str = r#"Scene(
         Body(name: "box", shape: Box(half_extents: (0.05, 0.04, 0.03)), position: (0.0, 0.0, 0.031),
              velocity: (0.1, 0.0, -0.2), angular_velocity: (1.0, 2.0, 3.0), mass: Density(700.0)),
         Body(name: "ball", shape: Sphere(radius: 0.05), position: (0.3, 0.0, 0.2), mass: Mass(1.0), material: "steel"),
+        Body(name: "egg", shape: Ellipsoid(semi_axes: (0.06, 0.03, 0.02)), position: (0.0, 0.3, 0.0201),
+             angular_velocity: (0.0, 0.0, -4.0), mass: Mass(0.5), point_masses: [PointMass(mass: 0.03, position: (0.05, 0.01, 0.005))]),
         Body(name: "hammer", shape: Compound(parts: [
                 Part(shape: Box(half_extents: (0.1, 0.01, 0.01))),
                 Part(shape: Box(half_extents: (0.02, 0.03, 0.03)), position: (0.1, 0.0, 0.0)),
