@@ -142,6 +142,8 @@ struct Scan {
     pieces: (usize, usize),
     /// How deep the bodies interpenetrate when touching (an upper bound; 0 otherwise).
     depth: f64,
+    /// The two bodies' motions at the check (for their time-of-impact bound).
+    motions: (Motion, Motion),
 }
 
 /// A simulated world.
@@ -656,6 +658,7 @@ impl World {
             others_key,
             pieces: (slot / nb, slot % nb),
             depth,
+            motions: (motion_a, motion_b),
         }
     }
 
@@ -682,9 +685,9 @@ impl World {
             n,
             self.eps_c,
             at_top,
-            &ba.motion(self.gravity),
+            &scan.motions.0,
             ba.reach[scan.pieces.0],
-            &bb.motion(self.gravity),
+            &scan.motions.1,
             bb.reach[scan.pieces.1],
         );
         (self.time + tau).min(scan.others_key)
@@ -863,19 +866,21 @@ fn piece_toi(
 ) -> f64 {
     // d̂ points from body a toward body b: the opposite of the normal.
     let d_hat = -n;
-    let mut gap = target_gap(d, eps_c);
+    let gap = target_gap(d, eps_c);
     if at_top {
         let floor = GAP_FLOOR_FRACTION * eps_c;
-        let (a1, b1) = motion_a.toi_coefficients(d_hat, r_a, gap.max(floor));
-        let (a2, b2) = motion_b.toi_coefficients(-d_hat, r_b, gap.max(floor));
-        let (a, b) = (a1 + a2, b1 + b2);
+        let floored = gap.max(floor);
+        let c1 = motion_a.toi_coefficients(d_hat, r_a, floored);
+        let c2 = motion_b.toi_coefficients(-d_hat, r_b, floored);
+        let (a, b) = (c1.0 + c2.0, c1.1 + c2.1);
         // Surely separating, by more than half the floor before turning back (the bound's
         // apex b²/4a; a body reversed after falling through the floor rises to the floor), or
         // never turning back.
         let separating = b < 0.0 && (a <= 0.0 || b * b > 2.0 * a * floor);
         if !separating {
-            // Possibly approaching, or barely leaving: the floor guarantees progress.
-            gap = gap.max(floor);
+            // Possibly approaching, or barely leaving: the floor guarantees progress (the
+            // coefficients above are this gap's: `toi::toi_lower_bound` without recomputing).
+            return toi::pair_toi(floored, c1, c2);
         } else if gap <= 0.0 {
             if a <= 0.0 {
                 return f64::INFINITY;
