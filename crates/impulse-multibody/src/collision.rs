@@ -496,11 +496,7 @@ mod tests {
         let mut rng = rng(6101);
         let (mut worst, mut asym, mut min_eig) = (0.0f64, 0.0f64, f64::INFINITY);
         for case in 0..300 {
-            let base = if case % 2 == 0 {
-                BaseKind::Floating
-            } else {
-                BaseKind::Fixed
-            };
+            let base = alternating_base(case);
             let spec = random_spec(&mut rng, 1 + case % 25, base, case % 3 == 0, true);
             let model = spec.model();
             let (q, _) = random_state(&mut rng, &model);
@@ -613,11 +609,7 @@ mod tests {
         let mut rng = rng(6104);
         let (mut e_dv, mut e_k, mut e_mom, mut e_energy) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
         for case in 0..200 {
-            let base = if case % 2 == 0 {
-                BaseKind::Floating
-            } else {
-                BaseKind::Fixed
-            };
+            let base = alternating_base(case);
             let spec = random_spec(&mut rng, 1 + case % 20, base, case % 4 == 0, true);
             let model = spec.model();
             let (q, v) = random_state(&mut rng, &model);
@@ -691,11 +683,7 @@ mod tests {
     fn articulated_inertias_depend_on_configuration_only() {
         let mut rng = rng(6105);
         for case in 0..30 {
-            let base = if case % 2 == 0 {
-                BaseKind::Floating
-            } else {
-                BaseKind::Fixed
-            };
+            let base = alternating_base(case);
             let spec = random_spec(&mut rng, 1 + case % 12, base, false, true);
             let model = spec.model();
             let (q, v1) = random_state(&mut rng, &model);

@@ -319,14 +319,8 @@ pub fn forward_dynamics(
     f_ext: Option<&[Wrench]>,
     vdot: &mut [f64],
 ) -> Result<(), MultibodyError> {
-    check_len("q", model.nq(), q.len())?;
-    check_len("v", model.nv(), v.len())?;
-    check_len("tau", model.nv(), tau.len())?;
+    check_dynamics_inputs(model, ws, q, v, tau, f_ext)?;
     check_len("vdot", model.nv(), vdot.len())?;
-    if let Some(f) = f_ext {
-        check_len("f_ext", model.body_count(), f.len())?;
-    }
-    ws.check(model)?;
     let wb = &mut ws.bodies[..];
     let nb = model.first_joint_body();
     let vo = model.base_dofs();
@@ -425,6 +419,25 @@ pub fn inverse_dynamics(
     rnea(model, ws, q, v, Some(vdot), f_ext, tau)
 }
 
+/// The checks ABA and RNEA share: lengths of `q` (nq), `v` and `tau` (nv) and `f_ext` (one
+/// wrench per body), and a workspace made for `model`.
+fn check_dynamics_inputs(
+    model: &Model,
+    ws: &Workspace,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    f_ext: Option<&[Wrench]>,
+) -> Result<(), MultibodyError> {
+    check_len("q", model.nq(), q.len())?;
+    check_len("v", model.nv(), v.len())?;
+    check_len("tau", model.nv(), tau.len())?;
+    if let Some(f) = f_ext {
+        check_len("f_ext", model.body_count(), f.len())?;
+    }
+    ws.check(model)
+}
+
 /// RNEA with `vdot = None` meaning zero acceleration.
 fn rnea(
     model: &Model,
@@ -435,14 +448,8 @@ fn rnea(
     f_ext: Option<&[Wrench]>,
     tau: &mut [f64],
 ) -> Result<(), MultibodyError> {
-    check_len("q", model.nq(), q.len())?;
-    check_len("v", model.nv(), v.len())?;
-    check_len("tau", model.nv(), tau.len())?;
+    check_dynamics_inputs(model, ws, q, v, tau, f_ext)?;
     let acc = |k: usize| vdot.map_or(0.0, |a| a[k]);
-    if let Some(f) = f_ext {
-        check_len("f_ext", model.body_count(), f.len())?;
-    }
-    ws.check(model)?;
     let wb = &mut ws.bodies[..];
     let nb = model.first_joint_body();
     let vo = model.base_dofs();
@@ -674,11 +681,7 @@ mod tests {
         let mut rng = rng(6002);
         let mut worst = 0.0f64;
         for case in 0..300 {
-            let base = if case % 2 == 0 {
-                BaseKind::Floating
-            } else {
-                BaseKind::Fixed
-            };
+            let base = alternating_base(case);
             let spec = random_spec(&mut rng, 1 + case % 15, base, case % 3 == 0, true);
             let model = spec.model();
             let mut ws = Workspace::new(&model);

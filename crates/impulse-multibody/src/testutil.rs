@@ -93,6 +93,15 @@ impl Spec {
     }
 }
 
+/// Floating base for even cases, fixed for odd ones (random tests cover both alike).
+pub fn alternating_base(case: usize) -> BaseKind {
+    if case % 2 == 0 {
+        BaseKind::Floating
+    } else {
+        BaseKind::Fixed
+    }
+}
+
 /// A random tree (or chain) with `n_moving` moving joints; about one link in eight is welded
 /// on by a fixed joint. Joint types: 70 % revolute, 30 % prismatic (if `prismatic`).
 pub fn random_spec(

@@ -633,23 +633,32 @@ struct RigidCase {
     normal: DVec3,
 }
 
+impl RigidCase {
+    /// Relative contact velocity in the contact frame.
+    fn u0(&self, frame: &ContactFrame) -> DVec3 {
+        let (v, w, r) = (self.v, self.w, self.r);
+        frame.to_contact(relative_contact_velocity(
+            v[0], w[0], r[0], v[1], w[1], r[1],
+        ))
+    }
+
+    /// The collision matrix of the two bodies (the second fixed when `fixed2`).
+    fn matrix(&self, frame: &ContactFrame) -> CollisionMatrix {
+        let b1 = Body::moving(self.m[0], self.inertia[0]).unwrap();
+        let b2 = if self.fixed2 {
+            Body::Fixed
+        } else {
+            Body::moving(self.m[1], self.inertia[1]).unwrap()
+        };
+        CollisionMatrix::rigid(&b1, self.r[0], &b2, self.r[1], frame).unwrap()
+    }
+}
+
 fn random_rigid_case(rng: &mut Xoshiro256PlusPlus) -> RigidCase {
     let mut m = [0.0; 2];
     let mut inertia = [DMat3::ZERO; 2];
     for b in 0..2 {
-        m[b] = 10f64.powf(rng.random_range(-2.0..2.0));
-        let h = DVec3::new(
-            rng.random_range(0.1..1.0),
-            rng.random_range(0.1..1.0),
-            rng.random_range(0.1..1.0),
-        );
-        let d = DVec3::new(
-            h.y * h.y + h.z * h.z,
-            h.x * h.x + h.z * h.z,
-            h.x * h.x + h.y * h.y,
-        ) * (m[b] / 3.0);
-        let q = DMat3::from_axis_angle(unit(rng), rng.random_range(0.0..std::f64::consts::TAU));
-        inertia[b] = q * DMat3::from_diagonal(d) * q.transpose();
+        (m[b], inertia[b]) = random_body(rng);
     }
     let fixed2 = rng.random_range(0.0..1.0) < 0.1;
     let contact = DVec3::new(
@@ -748,19 +757,11 @@ fn random_rigid_collisions() {
             let target = -u.length() * 10f64.powf(-rng.random_range(6.0..15.0));
             c.v[0] += c.normal * (target - un);
         }
-        let u0 = frame.to_contact(relative_contact_velocity(
-            c.v[0], c.w[0], c.r[0], c.v[1], c.w[1], c.r[1],
-        ));
+        let u0 = c.u0(&frame);
         if u0.z.is_nan() || u0.z >= 0.0 || (!grazing && u0.z >= -1e-6 * u0.length()) {
             continue;
         }
-        let b1 = Body::moving(c.m[0], c.inertia[0]).unwrap();
-        let b2 = if c.fixed2 {
-            Body::Fixed
-        } else {
-            Body::moving(c.m[1], c.inertia[1]).unwrap()
-        };
-        let k = CollisionMatrix::rigid(&b1, c.r[0], &b2, c.r[1], &frame).unwrap();
+        let k = c.matrix(&frame);
         let res = resolve(&k, u0, mu, e, Restitution::Stronge, &s)
             .unwrap_or_else(|err| panic!("case {done}: {err}; K={} u0={u0} μ={mu} e={e}", k.k()));
         done += 1;
@@ -907,19 +908,11 @@ fn recompression_matches_reference() {
         let mu = rng.random_range(1.0..2.0);
         let e = rng.random_range(0.0..=1.0);
         let frame = ContactFrame::from_normal(c.normal).unwrap();
-        let u0 = frame.to_contact(relative_contact_velocity(
-            c.v[0], c.w[0], c.r[0], c.v[1], c.w[1], c.r[1],
-        ));
+        let u0 = c.u0(&frame);
         if u0.z.is_nan() || u0.z >= -1e-6 * u0.length() {
             continue;
         }
-        let b1 = Body::moving(c.m[0], c.inertia[0]).unwrap();
-        let b2 = if c.fixed2 {
-            Body::Fixed
-        } else {
-            Body::moving(c.m[1], c.inertia[1]).unwrap()
-        };
-        let k = CollisionMatrix::rigid(&b1, c.r[0], &b2, c.r[1], &frame).unwrap();
+        let k = c.matrix(&frame);
         if k.lemma3_slope(mu) > 0.0 {
             continue;
         }
