@@ -185,31 +185,34 @@ impl Table {
 
     /// Stores `id` in every tile of `ranges` (levels 0..=res, res = the last level).
     fn add_all(&mut self, id: u32, ranges: &[CellRange]) {
-        let res = ranges.len() - 1;
-        for (level, range) in ranges.iter().enumerate() {
-            for cell in range.cells() {
-                let key = CellKey {
-                    level: level as u32,
-                    cell,
-                };
-                self.add(key, id, level == res);
-            }
+        for (key, own) in tiles(ranges) {
+            self.add(key, id, own);
         }
     }
 
     /// Removes `id` from every tile of `ranges` (levels 0..=res, res = the last level).
     fn remove_all(&mut self, id: u32, ranges: &[CellRange]) {
-        let res = ranges.len() - 1;
-        for (level, range) in ranges.iter().enumerate() {
-            for cell in range.cells() {
-                let key = CellKey {
-                    level: level as u32,
-                    cell,
-                };
-                self.remove(key, id, level == res);
-            }
+        for (key, own) in tiles(ranges) {
+            self.remove(key, id, own);
         }
     }
+}
+
+/// Every tile of `ranges` (levels 0..=res, res = the last level), with whether it is at res
+/// (the level whose tiles own the box).
+fn tiles(ranges: &[CellRange]) -> impl Iterator<Item = (CellKey, bool)> + '_ {
+    let res = ranges.len() - 1;
+    ranges.iter().enumerate().flat_map(move |(level, range)| {
+        range.cells().map(move |cell| {
+            (
+                CellKey {
+                    level: level as u32,
+                    cell,
+                },
+                level == res,
+            )
+        })
+    })
 }
 
 impl CoherentHash {
