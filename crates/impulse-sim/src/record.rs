@@ -95,15 +95,7 @@ impl Recording {
         for f in &self.frames {
             eat(f.time);
             for b in &f.bodies {
-                for x in b.position.to_array() {
-                    eat(x);
-                }
-                for x in b.rotation.to_array() {
-                    eat(x);
-                }
-                for x in b.velocity.to_array().into_iter().chain(b.omega.to_array()) {
-                    eat(x);
-                }
+                state_numbers(b).for_each(&mut eat);
             }
         }
         h
@@ -117,14 +109,7 @@ impl Recording {
         for f in &self.frames {
             for (name, b) in self.names.iter().zip(&f.bodies) {
                 let _ = write!(s, "{},{}", f.time, name);
-                for x in b
-                    .position
-                    .to_array()
-                    .into_iter()
-                    .chain(b.rotation.to_array())
-                    .chain(b.velocity.to_array())
-                    .chain(b.omega.to_array())
-                {
+                for x in state_numbers(b) {
                     let _ = write!(s, ",{x}");
                 }
                 s.push('\n');
@@ -161,15 +146,7 @@ impl Recording {
                     s.push_str(", ");
                 }
                 s.push('[');
-                let nums: Vec<String> = b
-                    .position
-                    .to_array()
-                    .into_iter()
-                    .chain(b.rotation.to_array())
-                    .chain(b.velocity.to_array())
-                    .chain(b.omega.to_array())
-                    .map(json_num)
-                    .collect();
+                let nums: Vec<String> = state_numbers(b).map(json_num).collect();
                 s.push_str(&nums.join(", "));
                 s.push(']');
             }
@@ -178,6 +155,17 @@ impl Recording {
         s.push_str("\n]}\n");
         s
     }
+}
+
+/// A body state as its 13 numbers, in the order of the CSV and JSON columns: position,
+/// quaternion (x, y, z, w), velocity, angular velocity.
+fn state_numbers(b: &BodyState) -> impl Iterator<Item = f64> {
+    b.position
+        .to_array()
+        .into_iter()
+        .chain(b.rotation.to_array())
+        .chain(b.velocity.to_array())
+        .chain(b.omega.to_array())
 }
 
 /// A JSON number (JSON has no NaN or infinity: those become `null`).
