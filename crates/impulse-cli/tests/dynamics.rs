@@ -1,8 +1,11 @@
 //! End-to-end tests of `impulse dynamics`: the binary on the bundled double-pendulum URDF,
 //! against the closed-form Lagrangian equations of a planar double pendulum.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+use common::{Output, impulse};
 
 /// Agreement with the closed forms (evaluated two ways in f64).
 const CLOSED_FORM: f64 = 1e-12;
@@ -11,25 +14,11 @@ fn fixture() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/urdf/double_pendulum.urdf")
 }
 
-struct Output {
-    ok: bool,
-    json: Option<serde_json::Value>,
-    stderr: String,
-}
-
 fn run(extra: &[&str]) -> Output {
     let path = fixture();
     let mut args = vec!["dynamics", path.to_str().unwrap()];
     args.extend_from_slice(extra);
-    let out = Command::new(env!("CARGO_BIN_EXE_impulse"))
-        .args(&args)
-        .output()
-        .unwrap();
-    Output {
-        ok: out.status.success(),
-        json: serde_json::from_slice(&out.stdout).ok(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
+    impulse(&args)
 }
 
 fn list(v: &serde_json::Value) -> Vec<f64> {
@@ -173,12 +162,9 @@ fn bad_input_fails_naming_the_option() {
         assert!(!out.ok, "{args:?} should fail");
         assert!(out.stderr.contains(needle), "{args:?}: {}", out.stderr);
     }
-    let out = Command::new(env!("CARGO_BIN_EXE_impulse"))
-        .args(["dynamics", "/nonexistent/robot.urdf"])
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("robot.urdf"));
+    let out = impulse(&["dynamics", "/nonexistent/robot.urdf"]);
+    assert!(!out.ok);
+    assert!(out.stderr.contains("robot.urdf"));
 }
 
 /// A bad model: the error names the link (the massless root cannot float).

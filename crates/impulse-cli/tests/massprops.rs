@@ -1,8 +1,11 @@
 //! End-to-end tests of `impulse massprops`: the binary on bundled and generated OBJ files,
 //! against analytic values.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+use common::{Output, impulse};
 
 use impulse_geom::{DVec3, PolyMesh, obj, primitives};
 
@@ -20,22 +23,8 @@ fn temp_file(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-struct Output {
-    ok: bool,
-    json: Option<serde_json::Value>,
-    stderr: String,
-}
-
 fn run(args: &[&str]) -> Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_impulse"))
-        .args(args)
-        .output()
-        .unwrap();
-    Output {
-        ok: out.status.success(),
-        json: serde_json::from_slice(&out.stdout).ok(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
+    impulse(args)
 }
 
 fn num(v: &serde_json::Value) -> f64 {
