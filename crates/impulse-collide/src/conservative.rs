@@ -4,7 +4,7 @@
 //!
 //! The truth is found independently of the bound under test: the bodies move by their exact
 //! ballistic centre-of-mass paths and torque-free rotations integrated by RK4
-//! ([`crate::motion::tests::Tumbler`]), and the gap is measured by V-Clip (itself checked against
+//! ([`crate::motion::testkit::Tumbler`]), and the gap is measured by V-Clip (itself checked against
 //! brute force). The reference advances time by conservative advancement with plain speed
 //! bounds — the gap divided by the largest possible closing speed of any two points,
 //! |Δv| + ω_max,a·r_a + ω_max,b·r_b (plus the gravity term against a fixed body) — which never
@@ -19,7 +19,7 @@ use impulse_geom::{ConvexPolyhedron, Pose, primitives};
 use rand::RngExt;
 
 use crate::feature::FeaturePair;
-use crate::motion::tests::{Tumbler, random_rotation, rng, unit_vector};
+use crate::motion::testkit::{Tumbler, random_rotation, rng, unit_vector};
 use crate::motion::{Ballistic, Motion, alpha_max_torque_free, omega_max_energy};
 use crate::toi::toi_lower_bound;
 use crate::vclip;

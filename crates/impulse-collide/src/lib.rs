@@ -27,6 +27,7 @@ pub mod gjk;
 pub mod heap;
 pub mod motion;
 pub mod point;
+pub mod root;
 pub mod shape;
 pub mod toi;
 pub mod vclip;

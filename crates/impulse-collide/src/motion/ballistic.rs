@@ -1,0 +1,386 @@
+//! Ballistic motion (thesis §2.3.2): a parabola and free tumbling.
+
+use glam::DVec3;
+use impulse_geom::Aabb;
+
+use super::{
+    ALL_SPACE, MotionError, UNBOUNDED_COEFFICIENTS, finite_scalar, finite_vec, non_negative, pad,
+};
+
+/// Ballistic motion (thesis §2.3.2): the centre of mass follows a parabola under constant
+/// gravity, the body tumbles freely (no torque), and `omega_max` bounds `‖ω‖` over the whole
+/// ballistic phase.
+///
+/// State at the current time t0, world frame: `com` (m), `velocity` (m/s), `gravity` (m/s²),
+/// `omega_max` (rad/s, from [`omega_max_energy`] or [`omega_max_energy_world`], recomputed by
+/// the caller after every impulse on the body). COM path: `p(τ) = com + v·τ + ½·g·τ²`.
+///
+/// Optionally ([`Ballistic::with_spin`]) the current angular velocity ω₀ (world) and a bound
+/// α_max on ‖ω̇‖ during the flight, which give a second rotational bound that is much tighter
+/// for a body spinning about the direction of approach (a top on a table), see
+/// [`Ballistic::toi_coefficients_for_gap`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ballistic {
+    com: DVec3,
+    velocity: DVec3,
+    gravity: DVec3,
+    omega_max: f64,
+    /// (ω₀ world, α_max), when known.
+    spin: Option<(DVec3, f64)>,
+}
+
+impl Ballistic {
+    /// A ballistic motion from its state at t0 (world frame; m, m/s, m/s², rad/s).
+    ///
+    /// # Errors
+    /// [`MotionError::NonFinite`] for a NaN or infinite input; [`MotionError::InvalidParameter`]
+    /// for a negative `omega_max`.
+    pub fn new(
+        com: DVec3,
+        velocity: DVec3,
+        gravity: DVec3,
+        omega_max: f64,
+    ) -> Result<Self, MotionError> {
+        Ok(Self {
+            com: finite_vec("com", com)?,
+            velocity: finite_vec("velocity", velocity)?,
+            gravity: finite_vec("gravity", gravity)?,
+            omega_max: non_negative("omega_max", omega_max)?,
+            spin: None,
+        })
+    }
+
+    /// Adds the spin refinement: the angular velocity `omega` (world, rad/s) now, and
+    /// `alpha_max` (rad/s²) bounding ‖ω̇‖ over the flight. For a torque-free body, L = I_w·ω is
+    /// constant, so I_w·ω̇ = L × ω and ‖ω̇‖ ≤ ‖L‖·ω_max / I_min ([`alpha_max_torque_free`]).
+    ///
+    /// # Errors
+    /// [`MotionError::NonFinite`] for a NaN or infinite `omega`; [`MotionError::InvalidParameter`]
+    /// for a negative or NaN `alpha_max`.
+    pub fn with_spin(self, omega: DVec3, alpha_max: f64) -> Result<Self, MotionError> {
+        Ok(Self {
+            spin: Some((
+                finite_vec("omega", omega)?,
+                non_negative("alpha_max", alpha_max)?,
+            )),
+            ..self
+        })
+    }
+
+    /// Centre of mass at t0 (world, m).
+    #[must_use]
+    pub fn com(&self) -> DVec3 {
+        self.com
+    }
+
+    /// Centre-of-mass velocity at t0 (world, m/s).
+    #[must_use]
+    pub fn velocity(&self) -> DVec3 {
+        self.velocity
+    }
+
+    /// Gravitational acceleration (world, m/s²).
+    #[must_use]
+    pub fn gravity(&self) -> DVec3 {
+        self.gravity
+    }
+
+    /// Bound on `‖ω‖` over the ballistic phase (rad/s).
+    #[must_use]
+    pub fn omega_max(&self) -> f64 {
+        self.omega_max
+    }
+
+    /// TOI coefficients (eqs. 2.2, 2.3): the velocity of a body point is `v(t) + ω(t)×r(t)`, so
+    /// its speed along d̂ is at most `[v(t0) + g·(t−t0)]·d̂ + r_max·ω_max`; integrating,
+    /// `A = ½·g·d̂` and `B = v(t0)·d̂ + r_max·ω_max·|d̂|`. Exact (equality) for a body that does
+    /// not rotate (`omega_max = 0`).
+    #[must_use]
+    pub fn toi_coefficients(&self, d_hat: DVec3, r_max: f64) -> (f64, f64) {
+        let len = d_hat.length();
+        if !(len.is_finite() && r_max >= 0.0 && r_max.is_finite()) {
+            return UNBOUNDED_COEFFICIENTS;
+        }
+        let a = 0.5 * self.gravity.dot(d_hat); // (2.2)
+        let b = self.velocity.dot(d_hat) + r_max * self.omega_max * len; // (2.3)
+        (a, b)
+    }
+
+    /// TOI coefficients for closing `gap`, the tighter of two bounds on the rotational part of
+    /// a point's displacement along d̂. The thesis's (eq. 2.3, [`Ballistic::toi_coefficients`]):
+    /// r_max·ω_max·τ. With the spin refinement: a point r moves along d̂ at
+    /// (ω × r)·d̂ = r·(d̂ × ω) ≤ r_max·‖d̂ × ω(t)‖ ≤ r_max·(‖d̂ × ω₀‖ + α_max·t), so its
+    /// rotational displacement is at most r_max·(‖d̂ × ω₀‖·τ + ½·α_max·τ²): coefficients
+    /// `A = ½·g·d̂ + ½·r_max·α_max·|d̂|`, `B = v·d̂ + r_max·‖d̂ × ω₀‖`. Both hold for every τ; the
+    /// one whose own time to close `gap` is later is returned (either is conservative).
+    #[must_use]
+    pub fn toi_coefficients_for_gap(&self, d_hat: DVec3, r_max: f64, gap: f64) -> (f64, f64) {
+        let base = self.toi_coefficients(d_hat, r_max);
+        let Some((omega, alpha)) = self.spin else {
+            return base;
+        };
+        if base == UNBOUNDED_COEFFICIENTS || !gap.is_finite() {
+            return base;
+        }
+        let len = d_hat.length();
+        let refined = (
+            0.5 * self.gravity.dot(d_hat) + 0.5 * r_max * alpha * len,
+            self.velocity.dot(d_hat) + r_max * d_hat.cross(omega).length(),
+        );
+        if crate::root::closing_time(gap, refined.0, refined.1)
+            > crate::root::closing_time(gap, base.0, base.1)
+        {
+            refined
+        } else {
+            base
+        }
+    }
+
+    /// Box enclosing the COM parabola between t0 and `t0 + dt` (either order of the two
+    /// times): both endpoints, plus on each axis k with `g_k ≠ 0` the apex
+    /// `p_k − v_k²/(2g_k)` when its time `−v_k/g_k` lies strictly between 0 and `dt`. Padded by
+    /// [`SWEPT_BOX_ROUNDING_REL`]. A NaN or infinite `dt` gives the box of all space.
+    #[must_use]
+    pub fn swept_com_aabb(&self, dt: f64) -> Aabb {
+        if !dt.is_finite() {
+            return ALL_SPACE;
+        }
+        let end = self.com_at(dt);
+        let mut b = Aabb::new(self.com, end);
+        let (lo, hi) = if dt >= 0.0 { (0.0, dt) } else { (dt, 0.0) };
+        for k in 0..3 {
+            let (p, v, g) = (self.com[k], self.velocity[k], self.gravity[k]);
+            if g != 0.0 {
+                let t_apex = -v / g;
+                if lo < t_apex && t_apex < hi {
+                    let apex = p - v * v / (2.0 * g);
+                    b.min[k] = b.min[k].min(apex);
+                    b.max[k] = b.max[k].max(apex);
+                }
+            }
+        }
+        let scale =
+            self.com.abs() + self.velocity.abs() * dt.abs() + 0.5 * self.gravity.abs() * (dt * dt);
+        pad(b, scale)
+    }
+
+    /// Centre of mass at `t0 + dt` (world, m): `com + v·dt + ½·g·dt²`.
+    #[must_use]
+    pub fn com_at(&self, dt: f64) -> DVec3 {
+        self.com + self.velocity * dt + self.gravity * (0.5 * dt * dt)
+    }
+
+    /// Centre-of-mass velocity at `t0 + dt` (world, m/s): `v + g·dt`.
+    #[must_use]
+    pub fn com_velocity_at(&self, dt: f64) -> DVec3 {
+        self.velocity + self.gravity * dt
+    }
+
+    /// The same motion re-based at `t0 + dt` (COM and velocity advanced; gravity and
+    /// `omega_max` kept, since the ω bound holds for the whole ballistic phase).
+    ///
+    /// # Errors
+    /// [`MotionError::NonFinite`] when `dt` is not finite or the advanced state overflows.
+    pub fn advance(&self, dt: f64) -> Result<Self, MotionError> {
+        finite_scalar("dt", dt)?;
+        Self::new(
+            self.com_at(dt),
+            self.com_velocity_at(dt),
+            self.gravity,
+            self.omega_max,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::testkit::*;
+    use crate::motion::*;
+    use glam::DVec3;
+    use impulse_geom::Aabb;
+    use rand::RngExt;
+
+    /// The spin refinement: for directions near the spin axis (where it is chosen) and random
+    /// ones, the coefficients returned for a small gap bound every vertex's displacement over a
+    /// tumbling box's trajectory (RK4 reference), and near the axis they are tighter than
+    /// eq. 2.3.
+    #[test]
+    fn spin_refined_coefficients_bound_every_vertex() {
+        const CASES: usize = 32;
+        let mut rng = rng(77);
+        let (mut refined_used, mut checked) = (0, 0);
+        for case in 0..CASES {
+            let half = random_box(&mut rng);
+            let inertia = box_inertia(half);
+            let (start, v0, g) = random_launch(&mut rng, case, inertia, 2.0, 0.5);
+            let w0 = start.w;
+            let omega_max = omega_max_energy(inertia, w0).unwrap();
+            let alpha = alpha_max_torque_free(inertia, w0).unwrap();
+            let w_world = start.q * w0;
+            let motion = Motion::from(
+                Ballistic::new(DVec3::ZERO, v0, g, omega_max)
+                    .unwrap()
+                    .with_spin(w_world, alpha)
+                    .unwrap(),
+            );
+            let r_max = half.length();
+            let dirs: Vec<DVec3> = (0..12)
+                .map(|k| {
+                    if k < 6 {
+                        (w_world.normalize() + unit_vector(&mut rng) * 0.05 * k as f64).normalize()
+                    } else {
+                        unit_vector(&mut rng)
+                    }
+                })
+                .collect();
+            let gap = 1e-4 * r_max;
+            let coeffs: Vec<(f64, f64)> = dirs
+                .iter()
+                .map(|&d| motion.toi_coefficients(d, r_max, gap))
+                .collect();
+            let Motion::Ballistic(b) = motion else {
+                unreachable!()
+            };
+            for (&d, &c) in dirs.iter().zip(&coeffs) {
+                if c != b.toi_coefficients(d, r_max) {
+                    refined_used += 1;
+                    assert!(
+                        crate::root::closing_time(gap, c.0, c.1) > {
+                            let base = b.toi_coefficients(d, r_max);
+                            crate::root::closing_time(gap, base.0, base.1)
+                        }
+                    );
+                }
+            }
+            let traj = Trajectory::new(half, start, (DVec3::ZERO, v0, g), SPAN_ANGLE / omega_max);
+            let v_start = traj.vertices(DVec3::ZERO, start.q);
+            for (k, s) in traj.states.iter().enumerate().skip(1) {
+                let tau = k as f64 * traj.h;
+                let verts = traj.vertices(traj.com_at(tau), s.q);
+                let scale = r_max + v0.length() * tau + g.length() * tau * tau;
+                for (&d, &(a, b)) in dirs.iter().zip(&coeffs) {
+                    let bound = a * tau * tau + b * tau;
+                    for (x, x0) in verts.iter().zip(&v_start) {
+                        checked += 1;
+                        let disp = (*x - *x0).dot(d);
+                        assert!(
+                            disp <= bound + BOUND_SLACK_REL * scale,
+                            "case {case} τ {tau}: displacement {disp} > bound {bound}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            refined_used >= CASES * 3,
+            "refinement chosen {refined_used} times"
+        );
+        eprintln!(
+            "spin refinement chosen for {refined_used} of {} directions; {checked} vertex checks",
+            CASES * 12
+        );
+    }
+
+    #[test]
+    fn ballistic_coefficients_bound_every_vertex_of_a_tumbling_box() {
+        const CASES: usize = 48;
+        const DIRECTIONS: usize = 12;
+        let mut rng = rng(2024);
+        let mut worst_rot_ratio: f64 = 0.0;
+        let mut worst_total_ratio: f64 = 0.0;
+        let mut max_inertia_ratio: f64 = 0.0;
+        let mut max_drift: f64 = 0.0;
+        for case in 0..CASES {
+            let half = match case {
+                0 => DVec3::splat(0.5),         // cube
+                1 => DVec3::new(1.4, 0.1, 0.1), // rod, ratio 98.5
+                _ => random_box(&mut rng),
+            };
+            let inertia = box_inertia(half);
+            max_inertia_ratio =
+                max_inertia_ratio.max(inertia.max_element() / inertia.min_element());
+            let (start, v0, g) = random_launch(&mut rng, case, inertia, 3.0, 5.0);
+            let w0 = start.w;
+            let omega_max = omega_max_energy(inertia, w0).unwrap();
+            let traj = Trajectory::new(half, start, (DVec3::ZERO, v0, g), SPAN_ANGLE / omega_max);
+            let motion = Motion::from(Ballistic::new(DVec3::ZERO, v0, g, omega_max).unwrap());
+            let r_max = half.length();
+            let dirs: Vec<DVec3> = (0..DIRECTIONS).map(|_| unit_vector(&mut rng)).collect();
+            let coeffs: Vec<(f64, f64)> = dirs
+                .iter()
+                .map(|&d| motion.toi_coefficients(d, r_max, 1.0))
+                .collect();
+            let v_start = traj.vertices(DVec3::ZERO, start.q);
+            let (e0, l0) = (start.energy2(), start.momentum_world());
+            for (k, s) in traj.states.iter().enumerate().skip(1) {
+                let tau = k as f64 * traj.h;
+                max_drift = max_drift
+                    .max((s.energy2() - e0).abs() / e0)
+                    .max((s.momentum_world() - l0).length() / l0.length());
+                let com = traj.com_at(tau);
+                let verts = traj.vertices(com, s.q);
+                let rot_bound = r_max * omega_max * tau;
+                let scale = r_max + v0.length() * tau + g.length() * tau * tau;
+                for (&d, &(a, b)) in dirs.iter().zip(&coeffs) {
+                    let bound = a * tau * tau + b * tau;
+                    for (x, x0) in verts.iter().zip(&v_start) {
+                        let disp = (*x - *x0).dot(d);
+                        assert!(
+                            disp <= bound + BOUND_SLACK_REL * scale,
+                            "case {case} τ {tau}: displacement {disp} > bound {bound}"
+                        );
+                        let rot = disp - (com.dot(d));
+                        worst_rot_ratio = worst_rot_ratio.max(rot / rot_bound);
+                        if bound > RATIO_FLOOR_REL * r_max {
+                            worst_total_ratio = worst_total_ratio.max(disp / bound);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(max_drift <= CONSERVATION_TOL, "RK4 drift {max_drift}");
+        assert!(max_inertia_ratio > 90.0);
+        assert!(worst_rot_ratio <= 1.0 + BOUND_SLACK_REL);
+        eprintln!(
+            "ballistic bound: max rotational displacement / (r_max·ω_max·τ) = \
+             {worst_rot_ratio:.4}, \
+             max displacement / bound = {worst_total_ratio:.4}, max RK4 drift = {max_drift:.2e}, \
+             max inertia ratio = {max_inertia_ratio:.1}"
+        );
+    }
+
+    #[test]
+    fn ballistic_swept_box_includes_the_apex() {
+        let g = DVec3::new(0.0, 0.0, -9.81);
+        let throw =
+            Motion::from(Ballistic::new(DVec3::ZERO, DVec3::new(1.0, 0.5, 5.0), g, 3.0).unwrap());
+        let dt = 1.0; // apex at 5/9.81 ≈ 0.51 s
+        let b = check_swept_box(&throw, dt, sampling_slack(9.81, dt, 10.0));
+        let apex = throw.com_at(5.0 / 9.81);
+        assert!(b.contains_point(apex));
+        // Without the apex, the box of the endpoints alone misses the top of the throw.
+        let endpoints_only =
+            Aabb::new(throw.com_at(0.0), throw.com_at(dt)).expanded(ENDPOINT_BOX_MARGIN);
+        assert!(!endpoints_only.contains_point(apex));
+        // Apex outside the interval: endpoints suffice; negative dt covers [t0 + dt, t0].
+        check_swept_box(&throw, 0.3, sampling_slack(9.81, 0.3, 10.0));
+        check_swept_box(&throw, -0.7, sampling_slack(9.81, 0.7, 10.0));
+        let mut rng = rng(3);
+        for _ in 0..300 {
+            let m = Motion::from(
+                Ballistic::new(
+                    unit_vector(&mut rng) * rng.random_range(0.0..100.0),
+                    unit_vector(&mut rng) * rng.random_range(0.0..20.0),
+                    unit_vector(&mut rng) * rng.random_range(0.0..20.0),
+                    0.0,
+                )
+                .unwrap(),
+            );
+            let dt = rng.random_range(0.0..4.0);
+            check_swept_box(&m, dt, sampling_slack(20.0, dt, 500.0));
+        }
+        assert_eq!(throw.swept_com_aabb(f64::NAN), ALL_SPACE);
+        assert_eq!(throw.swept_com_aabb(f64::INFINITY), ALL_SPACE);
+    }
+}
