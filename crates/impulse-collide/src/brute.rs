@@ -115,6 +115,40 @@ pub fn sat_separation(
         .fold(f64::NEG_INFINITY, f64::max)
 }
 
+/// The separating-axis measure with its axis: `(separation, normal)`, where `separation` is as
+/// [`sat_separation`] and `normal` (world, unit) is the candidate axis attaining it, oriented
+/// from `b` toward `a`: translating `a` by `−separation·normal` (when overlapping) makes the
+/// two touch. Ties go to the first axis in the order face normals of `a`, of `b`, edge pairs.
+pub fn sat_axis(
+    a: &ConvexPolyhedron,
+    pose_a: &Pose,
+    b: &ConvexPolyhedron,
+    pose_b: &Pose,
+) -> (f64, DVec3) {
+    let (va, vb) = (world_vertices(a, pose_a), world_vertices(b, pose_b));
+    let span = |vs: &[DVec3], axis: DVec3| {
+        vs.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                let x = v.dot(axis);
+                (lo.min(x), hi.max(x))
+            })
+    };
+    let mut best = (f64::NEG_INFINITY, DVec3::Z);
+    for axis in sat_axes(a, pose_a, b, pose_b, &va, &vb) {
+        let ((la, ha), (lb, hb)) = (span(&va, axis), span(&vb, axis));
+        // b beyond a along the axis (lb − ha), or a beyond b (la − hb).
+        let (gap, normal) = if lb - ha >= la - hb {
+            (lb - ha, -axis)
+        } else {
+            (la - hb, axis)
+        };
+        if gap > best.0 {
+            best = (gap, normal);
+        }
+    }
+    best
+}
+
 /// Whether no separating axis exists: the polyhedra overlap or touch. Stops at the first
 /// separating axis.
 pub fn overlaps(a: &ConvexPolyhedron, pose_a: &Pose, b: &ConvexPolyhedron, pose_b: &Pose) -> bool {

@@ -143,6 +143,7 @@ fn random_body(
         unit_vector(r) * 10f64.powf(r.random_range(-1.0..3.0))
     };
     let spin = Tumbler {
+        torque: DVec3::ZERO,
         inertia,
         q: random_rotation(r),
         w,
@@ -335,6 +336,7 @@ fn approach(
         v0: DVec3::new(speed, 0.0, 0.0),
         gravity: DVec3::new(0.0, 0.0, -9.81),
         spin: Tumbler {
+            torque: DVec3::ZERO,
             inertia,
             q: DQuat::IDENTITY,
             w,

@@ -22,12 +22,14 @@
 pub mod brute;
 #[cfg(test)]
 mod conservative;
+pub mod depth;
 pub mod feature;
 pub mod gjk;
 pub mod heap;
 pub mod motion;
 pub mod point;
 pub mod root;
+pub mod schedule;
 pub mod shape;
 pub mod toi;
 pub mod vclip;

@@ -223,6 +223,7 @@ mod tests {
         let inertia = box_inertia(half);
         let w = unit_vector(rng) * 10f64.powf(rng.random_range(-1.0..2.0));
         let start = Tumbler {
+            torque: DVec3::ZERO,
             inertia,
             q: random_rotation(rng),
             w,

@@ -7,9 +7,13 @@ use super::{
     ALL_SPACE, MotionError, UNBOUNDED_COEFFICIENTS, finite_scalar, finite_vec, non_negative, pad,
 };
 
-/// Ballistic motion (thesis §2.3.2): the centre of mass follows a parabola under constant
-/// gravity, the body tumbles freely (no torque), and `omega_max` bounds `‖ω‖` over the whole
-/// ballistic phase.
+/// Ballistic motion (thesis §2.3.2): the centre of mass follows a parabola under a constant
+/// acceleration (gravity, plus any constant external force over the mass), the body tumbles
+/// freely, and `omega_max` bounds `‖ω‖` over the whole ballistic phase.
+///
+/// Under a constant external torque τ (not in the thesis), the world angular momentum grows
+/// linearly, L(t) = L₀ + τ·t, so ‖ω(t)‖ ≤ ‖L(t)‖/I_min ≤ ω_max + β·t with ω_max = ‖L₀‖/I_min
+/// (eq. 2.4) and β = ‖τ‖/I_min ([`Ballistic::with_omega_growth`]).
 ///
 /// State at the current time t0, world frame: `com` (m), `velocity` (m/s), `gravity` (m/s²),
 /// `omega_max` (rad/s, from [`omega_max_energy`] or [`omega_max_energy_world`], recomputed by
@@ -27,6 +31,8 @@ pub struct Ballistic {
     omega_max: f64,
     /// (ω₀ world, α_max), when known.
     spin: Option<(DVec3, f64)>,
+    /// β (rad/s²): ‖ω(t0 + τ)‖ ≤ omega_max + β·τ. Zero for a torque-free body.
+    omega_growth: f64,
 }
 
 impl Ballistic {
@@ -47,7 +53,30 @@ impl Ballistic {
             gravity: finite_vec("gravity", gravity)?,
             omega_max: non_negative("omega_max", omega_max)?,
             spin: None,
+            omega_growth: 0.0,
         })
+    }
+
+    /// Lets the angular-speed bound grow linearly with time: ‖ω(t0 + τ)‖ ≤ omega_max + β·τ,
+    /// β = `growth` (rad/s²), for a body under a constant external torque τ_ext, where
+    /// β = ‖τ_ext‖/I_min and omega_max must then be the momentum bound ‖L₀‖/I_min (eq. 2.4;
+    /// the energy bound of eq. 2.5 assumes no torque). A body with growth gets no spin
+    /// refinement.
+    ///
+    /// # Errors
+    /// [`MotionError::NonFinite`] or [`MotionError::InvalidParameter`] for a NaN, infinite or
+    /// negative `growth`.
+    pub fn with_omega_growth(self, growth: f64) -> Result<Self, MotionError> {
+        Ok(Self {
+            omega_growth: non_negative("omega_growth", growth)?,
+            ..self
+        })
+    }
+
+    /// The growth rate β of the angular-speed bound (rad/s²; zero without torque).
+    #[must_use]
+    pub fn omega_growth(&self) -> f64 {
+        self.omega_growth
     }
 
     /// Adds the spin refinement: the angular velocity `omega` (world, rad/s) now, and
@@ -94,14 +123,16 @@ impl Ballistic {
     /// TOI coefficients (eqs. 2.2, 2.3): the velocity of a body point is `v(t) + ω(t)×r(t)`, so
     /// its speed along d̂ is at most `[v(t0) + g·(t−t0)]·d̂ + r_max·ω_max`; integrating,
     /// `A = ½·g·d̂` and `B = v(t0)·d̂ + r_max·ω_max·|d̂|`. Exact (equality) for a body that does
-    /// not rotate (`omega_max = 0`).
+    /// not rotate (`omega_max = 0`). With a growing ω bound (torque, β > 0) the rotational speed
+    /// bound r_max·(ω_max + β·t) adds `½·r_max·β·|d̂|` to `A`.
     #[must_use]
     pub fn toi_coefficients(&self, d_hat: DVec3, r_max: f64) -> (f64, f64) {
         let len = d_hat.length();
         if !(len.is_finite() && r_max >= 0.0 && r_max.is_finite()) {
             return UNBOUNDED_COEFFICIENTS;
         }
-        let a = 0.5 * self.gravity.dot(d_hat); // (2.2)
+        // (2.2), plus the rotational reach of the ω bound's growth under torque: ∫β·t = ½β·τ².
+        let a = 0.5 * self.gravity.dot(d_hat) + 0.5 * r_max * self.omega_growth * len;
         let b = self.velocity.dot(d_hat) + r_max * self.omega_max * len; // (2.3)
         (a, b)
     }
@@ -119,6 +150,9 @@ impl Ballistic {
         let Some((omega, alpha)) = self.spin else {
             return base;
         };
+        if self.omega_growth > 0.0 {
+            return base; // the spin refinement assumes no torque
+        }
         if base == UNBOUNDED_COEFFICIENTS || !gap.is_finite() {
             return base;
         }
@@ -183,12 +217,15 @@ impl Ballistic {
     /// [`MotionError::NonFinite`] when `dt` is not finite or the advanced state overflows.
     pub fn advance(&self, dt: f64) -> Result<Self, MotionError> {
         finite_scalar("dt", dt)?;
+        // Under torque the bound at the new t0 has grown by β·|dt|.
+        let omega_max = self.omega_max + self.omega_growth * dt.abs();
         Self::new(
             self.com_at(dt),
             self.com_velocity_at(dt),
             self.gravity,
-            self.omega_max,
-        )
+            omega_max,
+        )?
+        .with_omega_growth(self.omega_growth)
     }
 }
 
@@ -382,5 +419,63 @@ mod tests {
         }
         assert_eq!(throw.swept_com_aabb(f64::NAN), ALL_SPACE);
         assert_eq!(throw.swept_com_aabb(f64::INFINITY), ALL_SPACE);
+    }
+
+    /// Under a constant external torque the momentum bound grows linearly (‖ω‖ ≤ ‖L₀ + τt‖ /
+    /// I_min): the coefficients with that growth bound every vertex of a box spun up by a
+    /// random torque (RK4 reference with the torque), and without the growth they do not.
+    #[test]
+    fn torque_growth_coefficients_bound_every_vertex() {
+        const CASES: usize = 24;
+        const DIRECTIONS: usize = 12;
+        let mut rng = rng(2025);
+        let mut violated_without_growth = 0;
+        for case in 0..CASES {
+            let half = random_box(&mut rng);
+            let inertia = box_inertia(half);
+            let (mut start, v0, g) = random_launch(&mut rng, case, inertia, 1.0, 5.0);
+            let i_min = inertia.min_element();
+            // Torque large enough to change ω by ~10 rad/s over the span.
+            start.torque = unit_vector(&mut rng) * (i_min * rng.random_range(1.0..20.0));
+            let w_max = omega_max_momentum(inertia, start.w).unwrap();
+            let beta = start.torque.length() / i_min;
+            let span = 2.0;
+            let traj = Trajectory::new(half, start, (DVec3::ZERO, v0, g), span);
+            let plain = Ballistic::new(DVec3::ZERO, v0, g, w_max).unwrap();
+            let grown = Motion::from(plain.with_omega_growth(beta).unwrap());
+            let plain = Motion::from(plain);
+            let r_max = half.length();
+            let v_start = traj.vertices(DVec3::ZERO, start.q);
+            let dirs: Vec<DVec3> = (0..DIRECTIONS).map(|_| unit_vector(&mut rng)).collect();
+            for (k, s) in traj.states.iter().enumerate().skip(1) {
+                let tau = k as f64 * traj.h;
+                let verts = traj.vertices(traj.com_at(tau), s.q);
+                let scale = r_max + v0.length() * tau + g.length() * tau * tau;
+                for &d in &dirs {
+                    let (a, b) = grown.toi_coefficients(d, r_max, 1.0);
+                    let (pa, pb) = plain.toi_coefficients(d, r_max, 1.0);
+                    for (x, x0) in verts.iter().zip(&v_start) {
+                        let disp = (*x - *x0).dot(d);
+                        assert!(
+                            disp <= a * tau * tau + b * tau + BOUND_SLACK_REL * scale,
+                            "case {case} τ {tau}: displacement {disp} above the torque bound"
+                        );
+                        if disp > pa * tau * tau + pb * tau + BOUND_SLACK_REL * scale {
+                            violated_without_growth += 1;
+                        }
+                    }
+                }
+            }
+            // Re-basing keeps the bound valid: the advanced motion's ω bound has grown.
+            let Motion::Ballistic(b) = grown.advance(0.5).unwrap() else {
+                unreachable!()
+            };
+            assert!((b.omega_max() - (w_max + 0.5 * beta)).abs() <= 1e-12 * b.omega_max());
+        }
+        assert!(
+            violated_without_growth > 0,
+            "the torque never outran the plain bound"
+        );
+        eprintln!("torque: {violated_without_growth} vertex samples beat the bound without growth");
     }
 }

@@ -21,6 +21,7 @@
 //! | [`Cycler`] | COM on a circle at rate Ω, fixed orientation | (2.14) or (2.15), by D* |
 //! | [`Spinner`] | rotation about a fixed axis through a fixed COM | `(0, \|Ω\|·r_max·‖d̂⊥‖)` |
 //! | [`Oscillator`] | COM `p_c + a·sin(ωτ + φ)·axis`, fixed orientation | linear or quadratic |
+//! | [`Motion::Unbounded`] | unknown: no bound exists | `(0, +∞)`: check now |
 //!
 //! Design: *Option A*, a trait with one type per motion and `Box<dyn Motion>` per body;
 //! *Option B*, a closed `enum` of small `Copy` structs. Chose B: the set of motion types is
@@ -244,6 +245,15 @@ pub enum Motion {
     Spinner(Spinner),
     /// Scripted sinusoidal COM translation at fixed orientation.
     Oscillator(Oscillator),
+    /// A body whose motion cannot be bounded (its angular speed bound overflows, or its state
+    /// is not finite), with its last centre of mass (world, m; may be NaN). It is never
+    /// claimed to stay still: its coefficients are [`UNBOUNDED_COEFFICIENTS`] (every pair with
+    /// it is due now) and its swept box is all of space, so a caller must not advance time
+    /// past the present while a body has this motion.
+    Unbounded {
+        /// Last known centre of mass (world, m).
+        com: DVec3,
+    },
 }
 
 impl From<Ballistic> for Motion {
@@ -303,6 +313,7 @@ impl Motion {
             Motion::Cycler(m) => m.toi_coefficients(d_hat, gap),
             Motion::Spinner(m) => m.toi_coefficients(d_hat, r_max),
             Motion::Oscillator(m) => m.toi_coefficients(d_hat, gap),
+            Motion::Unbounded { .. } => UNBOUNDED_COEFFICIENTS,
         }
     }
 
@@ -317,6 +328,7 @@ impl Motion {
             Motion::Cycler(m) => m.swept_com_aabb(dt),
             Motion::Spinner(m) => m.swept_com_aabb(dt),
             Motion::Oscillator(m) => m.swept_com_aabb(dt),
+            Motion::Unbounded { .. } => ALL_SPACE,
         }
     }
 
@@ -325,7 +337,7 @@ impl Motion {
     #[must_use]
     pub fn com_at(&self, dt: f64) -> DVec3 {
         match self {
-            Motion::Fixed { com } => *com,
+            Motion::Fixed { com } | Motion::Unbounded { com } => *com,
             Motion::Ballistic(m) => m.com_at(dt),
             Motion::Cycler(m) => m.com_at(dt),
             Motion::Spinner(m) => m.com(),
@@ -333,11 +345,12 @@ impl Motion {
         }
     }
 
-    /// Centre-of-mass velocity at `t0 + dt` (world, m/s).
+    /// Centre-of-mass velocity at `t0 + dt` (world, m/s); NaN for an unbounded motion.
     #[must_use]
     pub fn com_velocity_at(&self, dt: f64) -> DVec3 {
         match self {
             Motion::Fixed { .. } | Motion::Spinner(_) => DVec3::ZERO,
+            Motion::Unbounded { .. } => DVec3::NAN,
             Motion::Ballistic(m) => m.com_velocity_at(dt),
             Motion::Cycler(m) => m.com_velocity_at(dt),
             Motion::Oscillator(m) => m.com_velocity_at(dt),
@@ -353,7 +366,7 @@ impl Motion {
     pub fn advance(&self, dt: f64) -> Result<Self, MotionError> {
         finite_scalar("dt", dt)?;
         Ok(match self {
-            Motion::Fixed { .. } | Motion::Spinner(_) => *self,
+            Motion::Fixed { .. } | Motion::Spinner(_) | Motion::Unbounded { .. } => *self,
             Motion::Ballistic(m) => Motion::Ballistic(m.advance(dt)?),
             Motion::Cycler(m) => Motion::Cycler(m.advance(dt)?),
             Motion::Oscillator(m) => Motion::Oscillator(m.advance(dt)?),
@@ -604,5 +617,25 @@ mod tests {
         let (a1, b1) = ball.toi_coefficients(y, 2.0, 1.0);
         let (a2, b2) = ball.toi_coefficients(y * 3.0, 2.0, 1.0);
         assert_eq!((a2, b2), (3.0 * a1, 3.0 * b1));
+    }
+
+    /// A motion that cannot be bounded never claims the body stays still: every pair with it
+    /// is due at once (τ = 0 against any partner, even a fixed one far away), its swept box is
+    /// all of space, and re-basing keeps it unbounded.
+    #[test]
+    fn an_unbounded_motion_is_checked_now() {
+        let u = Motion::Unbounded { com: DVec3::NAN };
+        let floor = Motion::fixed(DVec3::ZERO).unwrap();
+        for gap in [1e-9, 1.0, 1e9] {
+            let tau = crate::toi::toi_lower_bound(gap, DVec3::Z, &u, 1.0, &floor, 0.0);
+            assert_eq!(tau, 0.0, "gap {gap}");
+        }
+        assert_eq!(
+            u.toi_coefficients(DVec3::X, 0.0, 1.0),
+            UNBOUNDED_COEFFICIENTS
+        );
+        assert_eq!(u.swept_com_aabb(1e-6), ALL_SPACE);
+        assert!(matches!(u.advance(1.0).unwrap(), Motion::Unbounded { .. }));
+        assert!(u.com_velocity_at(0.0).is_nan());
     }
 }

@@ -238,6 +238,7 @@ mod tests {
             let momentum = omega_max_momentum(inertia, w0).unwrap();
             assert!(energy <= momentum * (1.0 + CLOSED_FORM_TOL));
             let start = Tumbler {
+                torque: DVec3::ZERO,
                 inertia,
                 q: DQuat::IDENTITY,
                 w: w0,

@@ -58,19 +58,22 @@ pub(crate) fn random_rotation(rng: &mut Xoshiro256PlusPlus) -> DQuat {
     .normalize()
 }
 
-/// Torque-free rigid rotation integrated by classical RK4: Euler's equations in the
-/// principal body frame, `I·ω̇ = (I·ω) × ω`, and `q̇ = ½·q ⊗ (ω, 0)` (q maps body to world).
-/// The independent reference for every ω and displacement bound.
+/// Rigid rotation integrated by classical RK4: Euler's equations in the principal body frame,
+/// `I·ω̇ = (I·ω) × ω + qᵀ·τ` with a constant world torque τ (zero: torque-free), and
+/// `q̇ = ½·q ⊗ (ω, 0)` (q maps body to world). The independent reference for every ω and
+/// displacement bound.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Tumbler {
     pub(crate) inertia: DVec3,
     pub(crate) q: DQuat,
     pub(crate) w: DVec3,
+    /// Constant external torque (world).
+    pub(crate) torque: DVec3,
 }
 
 impl Tumbler {
     fn derivative(&self, q: DQuat, w: DVec3) -> (DQuat, DVec3) {
-        let w_dot = (self.inertia * w).cross(w) / self.inertia;
+        let w_dot = ((self.inertia * w).cross(w) + q.inverse() * self.torque) / self.inertia;
         let q_dot = q * DQuat::from_xyzw(w.x, w.y, w.z, 0.0) * 0.5;
         (q_dot, w_dot)
     }
@@ -82,6 +85,7 @@ impl Tumbler {
         let (k3q, k3w) = self.derivative(q + k2q * (0.5 * h), w + k2w * (0.5 * h));
         let (k4q, k4w) = self.derivative(q + k3q * h, w + k3w * h);
         Tumbler {
+            torque: self.torque,
             inertia: self.inertia,
             q: (q + (k1q + k2q * 2.0 + k3q * 2.0 + k4q) * (h / 6.0)).normalize(),
             w: w + (k1w + k2w * 2.0 + k3w * 2.0 + k4w) * (h / 6.0),
@@ -201,7 +205,16 @@ pub(crate) fn random_launch(
     };
     let v0 = unit_vector(rng) * rng.random_range(0.0..max_speed);
     let q = random_rotation(rng);
-    (Tumbler { inertia, q, w }, v0, g)
+    (
+        Tumbler {
+            inertia,
+            q,
+            w,
+            torque: DVec3::ZERO,
+        },
+        v0,
+        g,
+    )
 }
 
 /// Samples `motion.com_at` densely over [0, dt] and checks the swept box contains every
