@@ -44,7 +44,17 @@ pub fn convex_penetration(
     b: &Convex,
     pose_b: &Pose,
 ) -> Option<Penetration> {
-    let p = match (a, b) {
+    let p = separating_axis(a, pose_a, b, pose_b);
+    (p.depth >= 0.0).then_some(p)
+}
+
+/// The contact normal of two convex pieces that touch, nearly touch or overlap, with the
+/// depth along it (negative: a gap). Unlike the direction between two closest points, which
+/// is rounding noise when they are a few ulps apart, this axis is well defined at zero
+/// distance: for polyhedra it is the candidate separating axis of largest gap (least overlap).
+#[must_use]
+pub fn separating_axis(a: &Convex, pose_a: &Pose, b: &Convex, pose_b: &Pose) -> Penetration {
+    match (a, b) {
         (Convex::Polyhedron(x), Convex::Polyhedron(y)) => {
             let (separation, normal) = brute::sat_axis(x, pose_a, y, pose_b);
             Penetration {
@@ -72,8 +82,7 @@ pub fn convex_penetration(
         (Convex::Ellipsoid(_), _) | (_, Convex::Ellipsoid(_)) => {
             support_overlap(a, pose_a, b, pose_b)
         }
-    };
-    (p.depth >= 0.0).then_some(p)
+    }
 }
 
 /// The deepest penetration over the piece pairs of two shapes, with the two piece indices, or

@@ -27,6 +27,7 @@ pub mod feature;
 pub mod gjk;
 pub mod heap;
 pub mod motion;
+pub mod patch;
 pub mod point;
 pub mod root;
 pub mod schedule;

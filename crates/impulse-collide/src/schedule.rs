@@ -84,7 +84,8 @@ impl Schedule {
     /// (unit, from the second body toward the first) cannot close its target gap.
     ///
     /// Elsewhere than `at_top`, this is the conservative bound of
-    /// [`toi::toi_lower_bound`] on the target gap. With `at_top` (the pair was just checked
+    /// [`toi::toi_lower_bound`] on the target gap (a touching pair that is surely separating
+    /// is due when it could be back at contact, below). With `at_top` (the pair was just checked
     /// at the top of the heap), a pair that may be approaching gets a gap of at least
     /// `floor_fraction`·ε_c (progress); a pair that is surely separating (its closing-speed
     /// bound is negative, by more than half the floor before turning back, or never turning
@@ -121,16 +122,21 @@ impl Schedule {
                 // coefficients above are this gap's: `toi_lower_bound` without recomputing).
                 return toi::pair_toi(floored, c1, c2);
             } else if gap <= 0.0 {
-                if qa <= 0.0 {
-                    return f64::INFINITY;
-                }
-                let disc = qb * qb - 4.0 * qa * depth.max(0.0);
-                return if disc > 0.0 {
-                    (-qb + disc.sqrt()) / (2.0 * qa)
-                } else {
-                    -qb / qa
-                };
+                return return_time(qa, qb, depth);
             }
+        } else if gap <= 0.0 {
+            // Touching, away from the top: due now, unless surely separating (the bound's rate
+            // of approach is negative), then when it could be back at contact — no deeper than
+            // it is now before then. Without this, touching bodies at rest whose neighbour got
+            // an impulse would all be due at the same instant again and again.
+            let c1 = a.motion.toi_coefficients(d_hat, a.reach, 0.0);
+            let c2 = b.motion.toi_coefficients(-d_hat, b.reach, 0.0);
+            let (qa, qb) = (c1.0 + c2.0, c1.1 + c2.1);
+            return if qb < 0.0 {
+                return_time(qa, qb, depth)
+            } else {
+                0.0
+            };
         }
         toi::toi_lower_bound(gap, d_hat, a.motion, a.reach, b.motion, b.reach)
     }
@@ -152,6 +158,21 @@ impl Schedule {
         let gap = self.target_gap(lb);
         let may_be_closest = best.is_none_or(|d| lb < d);
         gap > 0.0 && !may_be_closest && toi::pair_toi(gap, free_a, free_b) >= until
+    }
+}
+
+/// When a pair leaving contact (closing-rate bound `qa·τ² + qb·τ`, `qb < 0`) at penetration
+/// `depth` could be back at contact: the later root of `qa·τ² + qb·τ = −depth`; if the bound
+/// cannot rise that far, back where it is (`τ = −qb/qa`); never (`∞`) if it never turns back.
+fn return_time(qa: f64, qb: f64, depth: f64) -> f64 {
+    if qa <= 0.0 {
+        return f64::INFINITY;
+    }
+    let disc = qb * qb - 4.0 * qa * depth.max(0.0);
+    if disc > 0.0 {
+        (-qb + disc.sqrt()) / (2.0 * qa)
+    } else {
+        -qb / qa
     }
 }
 
