@@ -11,12 +11,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scene = Scene::read(std::path::Path::new(path))?;
     let until: f64 = match args.get(3) {
         Some(s) => s.parse()?,
-        None => scene.desc.duration,
+        None => scene
+            .desc
+            .duration
+            .ok_or("the scene has no duration: give one")?,
     };
     let mut w = World::from_scene(&scene)?;
     w.set_event_log(true);
-    let b = w.body_index(body).ok_or("no such body")?;
+    w.handle(body).ok_or("no such body")?;
     let rec = run(&mut w, until, scene.desc.output_rate, |_| {})?;
+    let b = rec.index(body).ok_or("no such body")?;
     for f in rec.frames.iter().step_by(10) {
         let s = f.bodies[b];
         println!(

@@ -7,12 +7,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .get(1)
         .ok_or("usage: spin <scene.ron> [until] [every]")?;
     let scene = Scene::read(std::path::Path::new(path))?;
-    let until: f64 = args.get(2).map_or(Ok(scene.desc.duration), |s| s.parse())?;
+    let until: f64 = args
+        .get(2)
+        .map_or(Ok(scene.desc.duration.unwrap_or(10.0)), |s| s.parse())?;
     let every: usize = args.get(3).map_or(Ok(20), |s| s.parse())?;
     let mut w = World::from_scene(&scene)?;
     let rec = run(&mut w, until, scene.desc.output_rate, |_| {})?;
-    let dynamic: Vec<usize> = (0..w.bodies().len())
-        .filter(|&i| w.bodies()[i].is_dynamic())
+    let dynamic: Vec<usize> = w
+        .bodies()
+        .enumerate()
+        .filter(|(_, (_, b))| b.is_dynamic())
+        .map(|(i, _)| i)
         .collect();
     for f in rec.frames.iter().step_by(every) {
         print!("{:6.2}", f.time);

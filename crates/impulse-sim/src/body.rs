@@ -1,17 +1,23 @@
 //! Bodies of a world and their motion between collisions (thesis §1.2: "dynamic evolution").
 //!
-//! A body's frame is its **principal frame at the centre of mass** (dynamic bodies) or the
-//! frame its shape was given in (fixed and scripted bodies). The pose maps that frame to the
-//! world; its translation is the centre of mass.
+//! A body has two frames. Its **pose** maps its principal frame at the centre of mass
+//! (dynamic bodies) or the frame its shape was given in (fixed and scripted bodies) to the
+//! world; the collision shape and the inertia live there. Its **own frame** is the frame the
+//! user placed it with (a scene's `position` and `rotation`): [`Body::frame_pose`] gives it,
+//! and that is what the world reports ([`crate::BodyState`]).
 //!
-//! Between collisions a dynamic body is ballistic: its centre of mass follows the gravity
-//! parabola exactly, and it rotates torque-free. The rotation is integrated with the world
-//! angular momentum `L` held constant (it is, exactly, without torque), so `L` is conserved to
-//! rounding by construction; the orientation `q` follows `q̇ = ½·ω⊗q` with
+//! Between collisions a dynamic body is ballistic: its centre of mass follows the parabola of
+//! gravity plus any constant external force over its mass exactly, and it rotates under its
+//! external torque (zero for the thesis's torque-free flight). The rotation is integrated with
+//! the world angular momentum `L(t) = L₀ + τ·t` in closed form (constant without torque), so
+//! `L` is exact to rounding by construction; the orientation `q` follows `q̇ = ½·ω⊗q` with
 //! `ω = R·I⁻¹·Rᵀ·L`, by an adaptive fourth-order Runge–Kutta with step doubling (11 derivative
 //! evaluations per step, as thesis chapter 7 describes). Kinetic energy `½ L·ω` then drifts
 //! only by the orientation error, bounded by [`Integrator::rotation_tolerance`]. Bodies with
-//! equal principal moments (spheres, cubes) rotate at constant ω and use the exact rotation.
+//! equal principal moments (spheres, cubes) and no torque rotate at constant ω and use the
+//! exact rotation.
+
+use std::sync::Arc;
 
 use glam::{DMat3, DQuat, DVec3};
 use impulse_collide::{Motion, Shape, motion::Ballistic};
@@ -83,12 +89,19 @@ pub enum AdvanceError {
 pub struct Body {
     /// The body's name (from the scene).
     pub name: String,
-    /// Collision shape in the body frame.
-    pub shape: Shape,
+    /// Collision shape in the body frame (shared: copies of a world share their shapes).
+    pub shape: Arc<Shape>,
     /// How the body moves.
     pub kind: BodyKind,
     /// Body frame → world; the translation is the centre of mass.
     pub pose: Pose,
+    /// The body's own frame (as the user placed it) in the body frame: the own frame's pose in
+    /// the world is `pose * frame` ([`Body::frame_pose`]).
+    pub frame: Pose,
+    /// Constant external force through the centre of mass (world; dynamic bodies).
+    pub force: DVec3,
+    /// Constant external torque (world; dynamic bodies).
+    pub torque: DVec3,
     /// Centre-of-mass velocity (world).
     pub velocity: DVec3,
     /// Angular velocity (world).
@@ -129,9 +142,12 @@ impl Body {
             .collect();
         Self {
             name,
-            shape,
+            shape: Arc::new(shape),
             kind,
             pose,
+            frame: Pose::IDENTITY,
+            force: DVec3::ZERO,
+            torque: DVec3::ZERO,
             velocity,
             omega,
             mass,
@@ -141,6 +157,32 @@ impl Body {
             script,
             step_hint: 0.0,
         }
+    }
+
+    /// The pose of the body's own frame (as the user placed it) in the world.
+    #[must_use]
+    pub fn frame_pose(&self) -> Pose {
+        self.pose * self.frame
+    }
+
+    /// The body's state as a program sees it: its own frame, velocities, centre of mass.
+    #[must_use]
+    pub fn state(&self) -> crate::world::BodyState {
+        let frame = self.frame_pose();
+        crate::world::BodyState {
+            position: frame.translation,
+            rotation: frame.rotation,
+            velocity: self.velocity,
+            omega: self.omega,
+            com: self.pose.translation,
+        }
+    }
+
+    /// The pose of the body frame (the one its shape is in) when its state is `state`:
+    /// the inverse of [`Body::state`]'s frame.
+    #[must_use]
+    pub fn pose_of(&self, state: &crate::world::BodyState) -> Pose {
+        Pose::new(state.rotation, state.position) * self.frame.inverse()
     }
 
     /// The largest rotational reach over the pieces (≤ r_max).
@@ -228,34 +270,58 @@ impl Body {
         }
     }
 
-    /// The motion model the collision detector bounds (thesis §2.3.2 and §2.5): ballistic with
-    /// the energy bound on ‖ω‖ (eq. 2.5) for a dynamic body, the script for a scripted one.
+    /// The constant acceleration of the centre of mass: gravity plus the external force over
+    /// the mass (gravity alone for fixed and scripted bodies).
+    #[must_use]
+    pub fn acceleration(&self, gravity: DVec3) -> DVec3 {
+        match self.mass {
+            Some(m) if self.force != DVec3::ZERO => gravity + self.force / m.mass,
+            _ => gravity,
+        }
+    }
+
+    /// The motion model the collision detector bounds (thesis §2.3.2 and §2.5): for a dynamic
+    /// body, ballistic under its acceleration with the energy bound on ‖ω‖ (eq. 2.5) and the
+    /// spin refinement, or, under an external torque, the momentum bound (eq. 2.4) growing
+    /// at ‖τ‖/I_min; the script for a scripted one. A body whose ω cannot be bounded (its
+    /// state overflows) gets [`Motion::Unbounded`]: it is due now against everything, never
+    /// assumed still.
     #[must_use]
     pub fn motion(&self, gravity: DVec3) -> Motion {
+        let com = self.pose.translation;
         match self.kind {
-            BodyKind::Fixed => Motion::Fixed {
-                com: self.pose.translation,
-            },
-            BodyKind::Scripted => self.script.unwrap_or(Motion::Fixed {
-                com: self.pose.translation,
-            }),
+            BodyKind::Fixed => Motion::Fixed { com },
+            BodyKind::Scripted => self.script.unwrap_or(Motion::Fixed { com }),
             BodyKind::Dynamic => {
-                let wb = self.pose.rotation.inverse() * self.omega;
-                let omega_max = self.mass.map_or(self.omega.length(), |m| {
-                    impulse_collide::motion::omega_max_energy(m.moments, wb)
-                        .unwrap_or(f64::INFINITY)
-                });
-                // Ballistic::new only fails for non-finite input; the bound then is "check now".
-                let Ok(ballistic) =
-                    Ballistic::new(self.pose.translation, self.velocity, gravity, omega_max)
-                else {
-                    return Motion::Fixed { com: DVec3::NAN };
+                let Some(m) = self.mass else {
+                    return Motion::Unbounded { com };
                 };
+                let wb = self.pose.rotation.inverse() * self.omega;
+                let acc = self.acceleration(gravity);
+                let torqued = self.torque != DVec3::ZERO;
+                let omega_max = if torqued {
+                    impulse_collide::motion::omega_max_momentum(m.moments, wb)
+                } else {
+                    impulse_collide::motion::omega_max_energy(m.moments, wb)
+                };
+                let Ok(ballistic) = omega_max
+                    .and_then(|w| Ballistic::new(com, self.velocity, acc, w))
+                    .and_then(|b| {
+                        if torqued {
+                            b.with_omega_growth(self.torque.length() / m.moments.min_element())
+                        } else {
+                            Ok(b)
+                        }
+                    })
+                else {
+                    return Motion::Unbounded { com };
+                };
+                if torqued {
+                    return Motion::Ballistic(ballistic);
+                }
                 // The spin refinement (a top spinning about the contact normal), when the
                 // angular acceleration bound exists.
-                let alpha = self.mass.and_then(|m| {
-                    impulse_collide::motion::alpha_max_torque_free(m.moments, wb).ok()
-                });
+                let alpha = impulse_collide::motion::alpha_max_torque_free(m.moments, wb).ok();
                 Motion::Ballistic(
                     alpha
                         .and_then(|a| ballistic.with_spin(self.omega, a).ok())
@@ -304,8 +370,9 @@ impl Body {
                 }
             }
             BodyKind::Dynamic => {
-                let com = self.pose.translation + self.velocity * dt + gravity * (0.5 * dt * dt);
-                self.velocity += gravity * dt;
+                let acc = self.acceleration(gravity);
+                let com = self.pose.translation + self.velocity * dt + acc * (0.5 * dt * dt);
+                self.velocity += acc * dt;
                 let rotation = self.rotate(dt, integrator)?;
                 self.pose = Pose::new(rotation, com);
             }
@@ -317,37 +384,39 @@ impl Body {
         }
     }
 
-    /// Torque-free rotation over `dt`; updates ω and returns the new orientation.
+    /// Rotation over `dt` under the body's constant torque (torque-free when zero); updates ω
+    /// and returns the new orientation.
     fn rotate(&mut self, dt: f64, integrator: &Integrator) -> Result<DQuat, AdvanceError> {
         let Some(m) = self.mass else {
             return Ok(self.pose.rotation);
         };
         let q0 = self.pose.rotation;
-        if self.omega == DVec3::ZERO {
+        let tau = self.torque;
+        if self.omega == DVec3::ZERO && tau == DVec3::ZERO {
             return Ok(q0);
         }
         let (lo, hi) = (m.moments.min_element(), m.moments.max_element());
-        if hi - lo <= ISOTROPIC_INERTIA_REL * hi {
+        if hi - lo <= ISOTROPIC_INERTIA_REL * hi && tau == DVec3::ZERO {
             // ω is constant: exact rotation.
             return Ok((DQuat::from_scaled_axis(self.omega * dt) * q0).normalize());
         }
-        // World angular momentum, constant while no torque acts.
+        // World angular momentum: L(t) = L₀ + τ·t exactly (constant without torque).
         let inv = m.moments.recip();
-        let l = self.inertia_world() * self.omega;
-        let omega_of = |q: DQuat| -> DVec3 {
-            let lb = q.inverse() * l;
+        let l0 = self.inertia_world() * self.omega;
+        let omega_of = |q: DQuat, t: f64| -> DVec3 {
+            let lb = q.inverse() * (l0 + tau * t);
             q * (lb * inv)
         };
         // q̇ = ½ (0, ω) ⊗ q.
-        let deriv = |q: DQuat| -> DQuat {
-            let w = omega_of(q);
+        let deriv = |q: DQuat, t: f64| -> DQuat {
+            let w = omega_of(q, t);
             DQuat::from_xyzw(w.x, w.y, w.z, 0.0) * q * 0.5
         };
-        let rk4 = |q: DQuat, h: f64| -> DQuat {
-            let k1 = deriv(q);
-            let k2 = deriv(q + k1 * (0.5 * h));
-            let k3 = deriv(q + k2 * (0.5 * h));
-            let k4 = deriv(q + k3 * h);
+        let rk4 = |q: DQuat, t: f64, h: f64| -> DQuat {
+            let k1 = deriv(q, t);
+            let k2 = deriv(q + k1 * (0.5 * h), t + 0.5 * h);
+            let k3 = deriv(q + k2 * (0.5 * h), t + 0.5 * h);
+            let k4 = deriv(q + k3 * h, t + h);
             q + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0)
         };
         let tol = integrator.rotation_tolerance;
@@ -355,7 +424,8 @@ impl Body {
             self.step_hint
         } else {
             // Start at a tenth of a radian per step.
-            0.1 / omega_of(q0).length().max(f64::MIN_POSITIVE)
+            let w_end = omega_of(q0, dt).length();
+            0.1 / omega_of(q0, 0.0).length().max(w_end).max(f64::MIN_POSITIVE)
         };
         let (mut t, mut q) = (0.0, q0);
         let h_min = dt * MIN_STEP_REL;
@@ -367,8 +437,8 @@ impl Body {
             }
             let last = h >= dt - t;
             let step = if last { dt - t } else { h };
-            let full = rk4(q, step);
-            let half = rk4(rk4(q, 0.5 * step), 0.5 * step);
+            let full = rk4(q, t, step);
+            let half = rk4(rk4(q, t, 0.5 * step), t + 0.5 * step, 0.5 * step);
             let err = (half - full).length();
             if !err.is_finite() {
                 return Err(AdvanceError::NonFinite);
@@ -385,7 +455,7 @@ impl Body {
             }
         }
         self.step_hint = h;
-        self.omega = omega_of(q);
+        self.omega = omega_of(q, dt);
         Ok(q)
     }
 }

@@ -21,7 +21,7 @@ pub(crate) fn rotation(r: &RotationDesc) -> DQuat {
         RotationDesc::AxisAngle { axis, degrees } => {
             DQuat::from_axis_angle(DVec3::from_array(axis).normalize(), degrees.to_radians())
         }
-        RotationDesc::Quaternion([x, y, z, w]) => DQuat::from_xyzw(x, y, z, w).normalize(),
+        RotationDesc::Quaternion(x, y, z, w) => DQuat::from_xyzw(x, y, z, w).normalize(),
     }
 }
 
@@ -164,7 +164,7 @@ pub(crate) fn body(desc: &BodyDesc, material: usize, base_dir: &Path) -> Result<
             }
             let frame = Pose::new(DQuat::from_mat3(&principal.axes).normalize(), mp.com);
             let shape = shape_in(frame)?;
-            Ok(Body::new(
+            let mut body = Body::new(
                 desc.name.clone(),
                 shape,
                 BodyKind::Dynamic,
@@ -177,7 +177,10 @@ pub(crate) fn body(desc: &BodyDesc, material: usize, base_dir: &Path) -> Result<
                 }),
                 material,
                 None,
-            ))
+            );
+            // The user's frame seen from the principal frame: user = pose · frame⁻¹.
+            body.frame = frame.inverse();
+            Ok(body)
         }
         MotionDesc::Fixed => Ok(Body::new(
             desc.name.clone(),

@@ -22,10 +22,10 @@ pub enum SimError {
         /// RON's message, with line and column.
         message: String,
     },
-    /// A value in the scene is out of range.
+    /// A value in the scene, or given to a world, is out of range.
     #[error("{what}: field `{field}`: {problem}")]
     Invalid {
-        /// The body, material pair or `scene`.
+        /// The body, material pair, `scene`, `world` or the call.
         what: String,
         /// The field.
         field: String,
@@ -40,15 +40,27 @@ pub enum SimError {
         /// What went wrong.
         message: String,
     },
-    /// Two bodies overlap or lie closer than the collision epsilon at the start.
-    #[error("bodies \"{a}\" and \"{b}\" {problem} at the start; move them apart")]
-    InitialOverlap {
+    /// Two bodies overlap by more than the collision epsilon (placed so at the start, added
+    /// or moved so by a program). Touching, or overlapping by less, is contact.
+    #[error(
+        "bodies \"{a}\" and \"{b}\" overlap by {depth:.3e}, more than ε_c = {collision_epsilon:.3e}; \
+         move them apart (touching is fine)"
+    )]
+    Overlap {
         /// First body.
         a: String,
         /// Second body.
         b: String,
-        /// "overlap" or "are closer than ε_c (distance …)".
-        problem: String,
+        /// Penetration depth (the smallest translation that separates them).
+        depth: f64,
+        /// The world's ε_c.
+        collision_epsilon: f64,
+    },
+    /// A body handle whose body has been removed (or that belongs to another world).
+    #[error("no body {handle} in this world (removed?)")]
+    UnknownBody {
+        /// The handle, as `#slot.generation`.
+        handle: String,
     },
     /// The simulation cannot continue.
     #[error("t = {time}: {message}")]

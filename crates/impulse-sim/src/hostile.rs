@@ -32,7 +32,7 @@ const VALID: &str = r#"Scene(
 fn attempt(text: &str) -> Result<(), SimError> {
     let desc = SceneDesc::from_ron(text, "hostile")?;
     let mut world = World::from_scene(&Scene::new(desc, "."))?;
-    world.step_until(0.02)
+    world.step_until(0.02).map(|_| ())
 }
 
 #[test]
@@ -131,10 +131,12 @@ fn named_errors_for_bad_values() {
 fn empty_scene_and_missing_fields_are_errors() {
     let empty = "Scene(duration: 1.0, collision_epsilon: 1e-3, bodies: [])";
     expect_invalid(empty, "scene", "bodies");
-    // Missing `duration`: a parse error naming the field.
-    let text = VALID.replace("duration: 0.05,", "");
+    // `duration` is optional (a caller gives the end time); `bodies` is not.
+    attempt(&VALID.replace("duration: 0.05,", "")).unwrap();
+    let start = VALID.find("    bodies: [").unwrap();
+    let text = format!("{})", &VALID[..start]);
     match attempt(&text) {
-        Err(SimError::Parse { message, .. }) => assert!(message.contains("duration"), "{message}"),
+        Err(SimError::Parse { message, .. }) => assert!(message.contains("bodies"), "{message}"),
         other => panic!("{other:?}"),
     }
     // Unknown field.
@@ -149,7 +151,7 @@ fn overlapping_and_degenerate_bodies_are_errors() {
     // The ball moved into the box.
     let text = VALID.replace("position: (0.3, 0.0, 0.2)", "position: (0.0, 0.0, 0.05)");
     match attempt(&text) {
-        Err(SimError::InitialOverlap { a, b, .. }) => {
+        Err(SimError::Overlap { a, b, .. }) => {
             assert_eq!((a.as_str(), b.as_str()), ("box", "ball"));
         }
         other => panic!("{other:?}"),

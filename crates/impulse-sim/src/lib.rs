@@ -1,13 +1,43 @@
 //! # impulse-sim — layer 4 of the `impulse` workspace
 //!
-//! **Owns** the impulse-based simulator of thesis §1.2 and chapter 7 (Mirtich 1996):
-//! - [`World`]: fixed, dynamic (ballistic between collisions) and scripted bodies; the event
-//!   loop that takes the critical pair from the collision heap, advances every body to its
-//!   time (in parallel, deterministically), checks the pair and resolves a collision or
-//!   microcollision ([`world`]);
-//! - bodies and their torque-free motion ([`body`]), contact resolution through
-//!   `impulse-response` ([`contact`]);
-//! - scene files in RON with validation that names the body and field ([`scene`]);
+//! A world of rigid bodies that collide by impulses (Mirtich 1996, chapters 1–3 and 7): built
+//! in code or from a scene file, stepped to any time, read between steps.
+//!
+//! ```
+//! use glam::DVec3;
+//! use impulse_sim::scene::{BodyDesc, ShapeDesc};
+//! use impulse_sim::{World, WorldSettings};
+//!
+//! // A 10 cm box resting exactly on a floor whose top is z = 0, ε_c = 0.1 mm.
+//! let mut world = World::new(WorldSettings::new(1e-4))?;
+//! world.add_body(&BodyDesc::fixed("floor", ShapeDesc::cuboid([1.0, 1.0, 0.1])).at([0.0, 0.0, -0.1]))?;
+//! let cube = world.add_body(
+//!     &BodyDesc::new("box", ShapeDesc::cuboid([0.05, 0.05, 0.05]))
+//!         .at([0.0, 0.0, 0.05])
+//!         .with_density(700.0),
+//! )?;
+//! // A ball dropped beside it.
+//! let ball = world.add_body(&BodyDesc::new("ball", ShapeDesc::sphere(0.02)).at([0.3, 0.0, 0.2]))?;
+//! let report = world.step_until(1.0)?;
+//! let resting = world.state(cube)?;
+//! assert!((resting.position - DVec3::new(0.0, 0.0, 0.05)).length() < 1e-3);
+//! assert!(world.state(ball)?.position.z < 0.03); // it fell and bounced down to the floor
+//! assert!(report.counters.collisions > 0);
+//! # Ok::<(), impulse_sim::SimError>(())
+//! ```
+//!
+//! **Owns**
+//! - [`World`]: fixed, dynamic (ballistic between collisions) and scripted bodies named by
+//!   [`BodyHandle`]s; adding, removing, moving and pushing them (impulses, constant loads, load
+//!   functions); the event loop that takes the critical pair from the collision heap,
+//!   advances every body to its time (in parallel, deterministically), checks the pair and
+//!   resolves a collision or microcollision ([`world`]); contacts of the last step and a
+//!   per-step report; a fallback for contacts the response cannot resolve;
+//! - bodies and their motion under gravity, loads and torques ([`body`]), contact
+//!   resolution through `impulse-response` ([`contact`]);
+//! - scene descriptions in RON, with validation that names the body and field, and builders
+//!   that make the same descriptions in code ([`scene`]);
+//! - an independent penetration monitor ([`monitor`]);
 //! - recording at a fixed frame rate, trajectory hashes, CSV and JSON ([`record`]).
 //!
 //! **Must not know** command lines, terminals or plotting: those belong to `impulse-cli`.
@@ -15,16 +45,22 @@
 
 pub mod body;
 mod build;
+mod builder;
 pub mod contact;
 mod error;
+pub mod monitor;
 pub mod record;
 pub mod scene;
 pub mod world;
 
 pub use error::SimError;
+pub use monitor::{PenetrationMonitor, PenetrationReport};
 pub use record::{Frame, Recording, run};
 pub use scene::{Scene, SceneDesc};
-pub use world::{BodyState, ContactEvent, Counters, World};
+pub use world::{
+    BodyHandle, BodyState, ContactEvent, ContactFailure, Counters, Load, LoadFn, Material,
+    StepReport, World, WorldSettings,
+};
 
 #[cfg(test)]
 mod hostile;

@@ -1,15 +1,19 @@
-//! Recording a run: frames at a fixed rate, a summary, a trajectory hash, CSV and JSON output.
+//! Recording a run: frames at a fixed rate, the penetration monitor's findings, a trajectory
+//! hash, CSV and JSON output.
 
 use std::fmt::Write as _;
 
-use crate::world::{BodyState, Counters, World};
+use serde::Serialize;
+
+use crate::monitor::{PenetrationMonitor, PenetrationReport};
+use crate::world::{BodyHandle, BodyState, Counters, World};
 
 /// The state of the world at one instant.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Simulated time.
     pub time: f64,
-    /// Every body's state, in scene order.
+    /// Every body's state, in the order of [`Recording::names`].
     pub bodies: Vec<BodyState>,
     /// Total kinetic energy.
     pub kinetic_energy: f64,
@@ -36,35 +40,72 @@ impl Frame {
 /// A recorded run.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Recording {
-    /// Body names, in scene order.
+    /// Body names, in the order of every frame's states.
     pub names: Vec<String>,
+    /// Body handles, in the same order.
+    pub handles: Vec<BodyHandle>,
     /// Frames, in time order (the first at the start time).
     pub frames: Vec<Frame>,
     /// Counters at the end.
     pub counters: Counters,
     /// Wall-clock time of the run (s).
     pub wall_time: f64,
+    /// The independent penetration monitor, sampled at every frame.
+    pub penetration: PenetrationReport,
+    /// The world's checking mode (every loop step), when it was on.
+    pub checked: Option<PenetrationReport>,
+}
+
+/// Column names of a body state in CSV and JSON, after `time` and `body`.
+pub const STATE_COLUMNS: [&str; 16] = [
+    "x", "y", "z", "qx", "qy", "qz", "qw", "vx", "vy", "vz", "wx", "wy", "wz", "cx", "cy", "cz",
+];
+
+/// Why a run could not be recorded.
+fn invalid(field: &str, problem: String) -> crate::SimError {
+    crate::SimError::Invalid {
+        what: "run".into(),
+        field: field.into(),
+        problem,
+    }
 }
 
 /// Runs `world` to `until`, recording a frame every `1/rate` of simulated time (and at the
-/// end). `progress` is called after every frame with the current simulated time.
+/// end) and sampling the [`PenetrationMonitor`] at every frame. `progress` is called after
+/// every frame with the current simulated time.
 ///
 /// # Errors
-/// As [`World::step_until`].
+/// [`crate::SimError::Invalid`] for an `until` that is not a finite time after now, a rate
+/// that is not positive, or more than [`crate::scene::MAX_FRAMES`] frames; otherwise as
+/// [`World::step_until`].
 pub fn run(
     world: &mut World,
     until: f64,
     rate: f64,
     mut progress: impl FnMut(f64),
 ) -> Result<Recording, crate::SimError> {
-    let start = std::time::Instant::now();
-    let names = world.bodies().iter().map(|b| b.name.clone()).collect();
-    let mut frames = vec![Frame::of(world)];
     let t0 = world.time();
+    if !(until.is_finite() && until > t0) {
+        return Err(invalid(
+            "until",
+            format!("{until} must be a finite time after the current time {t0}"),
+        ));
+    }
+    if !(rate.is_finite() && rate > 0.0) {
+        return Err(invalid("rate", format!("{rate} must be finite and > 0")));
+    }
+    crate::scene::check_frames(until - t0, rate).map_err(|p| invalid("rate", p))?;
+    let start = std::time::Instant::now();
+    let (handles, names): (Vec<_>, Vec<_>) =
+        world.bodies().map(|(h, b)| (h, b.name.clone())).unzip();
+    let mut monitor = PenetrationMonitor::new();
+    monitor.sample(world);
+    let mut frames = vec![Frame::of(world)];
     let mut k = 1u64;
     loop {
         let t = (t0 + k as f64 / rate).min(until);
         world.step_until(t)?;
+        monitor.sample(world);
         frames.push(Frame::of(world));
         progress(t);
         if t >= until {
@@ -74,13 +115,32 @@ pub fn run(
     }
     Ok(Recording {
         names,
+        handles,
         frames,
         counters: world.counters(),
         wall_time: start.elapsed().as_secs_f64(),
+        penetration: monitor.report().clone(),
+        checked: world.checked_penetration().cloned(),
     })
 }
 
 impl Recording {
+    /// The position of body `name` in every frame's states.
+    #[must_use]
+    pub fn index(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    /// The largest penetration any monitor measured: at the frames, and at every loop step
+    /// when the checking mode was on (length).
+    #[must_use]
+    pub fn max_penetration(&self) -> f64 {
+        self.checked
+            .as_ref()
+            .map_or(0.0, |c| c.max_depth)
+            .max(self.penetration.max_depth)
+    }
+
     /// FNV-1a hash of every recorded number's bits: equal hashes mean bit-identical
     /// trajectories (the determinism check).
     #[must_use]
@@ -95,19 +155,22 @@ impl Recording {
         for f in &self.frames {
             eat(f.time);
             for b in &f.bodies {
-                state_numbers(b).for_each(&mut eat);
+                state_numbers(b).into_iter().for_each(&mut eat);
             }
         }
         h
     }
 
-    /// The trajectory as CSV: one row per frame and body: `time, body, x, y, z, qx, qy, qz,
-    /// qw, vx, vy, vz, wx, wy, wz` (centre of mass, orientation, velocity, angular velocity).
+    /// The trajectory as CSV: a header, then one row per frame and body: `time, body`, the
+    /// body's own frame (`x, y, z` its origin, `qx, qy, qz, qw` its orientation), the
+    /// velocity of its centre of mass `vx, vy, vz`, its angular velocity `wx, wy, wz`, and its
+    /// centre of mass `cx, cy, cz` (all world). Names are quoted when they need it.
     #[must_use]
     pub fn to_csv(&self) -> String {
-        let mut s = String::from("time,body,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz\n");
+        let mut s = format!("time,body,{}\n", STATE_COLUMNS.join(","));
+        let names: Vec<String> = self.names.iter().map(|n| csv_field(n)).collect();
         for f in &self.frames {
-            for (name, b) in self.names.iter().zip(&f.bodies) {
+            for (name, b) in names.iter().zip(&f.bodies) {
                 let _ = write!(s, "{},{}", f.time, name);
                 for x in state_numbers(b) {
                     let _ = write!(s, ",{x}");
@@ -118,61 +181,59 @@ impl Recording {
         s
     }
 
-    /// The trajectory as JSON: `{"bodies": [names], "frames": [{"t", "kinetic_energy",
-    /// "potential_energy", "states": [[x, y, z, qx, qy, qz, qw, vx, vy, vz, wx, wy, wz], …]}]}`.
+    /// The trajectory as JSON: `{"bodies": [names], "columns": [the state columns of
+    /// [`Recording::to_csv`]], "frames": [{"t", "kinetic_energy", "potential_energy",
+    /// "states": [[16 numbers per body], …]}, …], "max_penetration": …}`. Written by
+    /// `serde_json`: any name is valid JSON; a non-finite number is `null`.
     #[must_use]
     pub fn to_json(&self) -> String {
-        let mut s = String::from("{\"bodies\": [");
-        for (k, n) in self.names.iter().enumerate() {
-            if k > 0 {
-                s.push_str(", ");
-            }
-            let _ = write!(s, "{n:?}");
+        #[derive(Serialize)]
+        struct JsonFrame {
+            t: f64,
+            kinetic_energy: f64,
+            potential_energy: f64,
+            states: Vec<[f64; 16]>,
         }
-        s.push_str("],\n\"frames\": [\n");
-        for (k, f) in self.frames.iter().enumerate() {
-            if k > 0 {
-                s.push_str(",\n");
-            }
-            let _ = write!(
-                s,
-                "{{\"t\": {}, \"kinetic_energy\": {}, \"potential_energy\": {}, \"states\": [",
-                json_num(f.time),
-                json_num(f.kinetic_energy),
-                json_num(f.potential_energy)
-            );
-            for (j, b) in f.bodies.iter().enumerate() {
-                if j > 0 {
-                    s.push_str(", ");
-                }
-                s.push('[');
-                let nums: Vec<String> = state_numbers(b).map(json_num).collect();
-                s.push_str(&nums.join(", "));
-                s.push(']');
-            }
-            s.push_str("]}");
+        #[derive(Serialize)]
+        struct Json<'a> {
+            bodies: &'a [String],
+            columns: [&'static str; 16],
+            frames: Vec<JsonFrame>,
+            max_penetration: f64,
         }
-        s.push_str("\n]}\n");
-        s
+        let json = Json {
+            bodies: &self.names,
+            columns: STATE_COLUMNS,
+            frames: self
+                .frames
+                .iter()
+                .map(|f| JsonFrame {
+                    t: f.time,
+                    kinetic_energy: f.kinetic_energy,
+                    potential_energy: f.potential_energy,
+                    states: f.bodies.iter().map(state_numbers).collect(),
+                })
+                .collect(),
+            max_penetration: self.max_penetration(),
+        };
+        serde_json::to_string(&json)
+            .map_or_else(|e| format!("{{\"error\": \"{e}\"}}"), |s| s + "\n")
     }
 }
 
-/// A body state as its 13 numbers, in the order of the CSV and JSON columns: position,
-/// quaternion (x, y, z, w), velocity, angular velocity.
-fn state_numbers(b: &BodyState) -> impl Iterator<Item = f64> {
-    b.position
-        .to_array()
-        .into_iter()
-        .chain(b.rotation.to_array())
-        .chain(b.velocity.to_array())
-        .chain(b.omega.to_array())
+/// A body state as its 16 numbers, in the order of [`STATE_COLUMNS`].
+fn state_numbers(b: &BodyState) -> [f64; 16] {
+    let (p, q, v, w, c) = (b.position, b.rotation, b.velocity, b.omega, b.com);
+    [
+        p.x, p.y, p.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z, c.x, c.y, c.z,
+    ]
 }
 
-/// A JSON number (JSON has no NaN or infinity: those become `null`).
-fn json_num(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x}")
+/// A CSV field: quoted (quotes doubled) when it holds a comma, quote or line break.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
     } else {
-        "null".into()
+        s.to_string()
     }
 }

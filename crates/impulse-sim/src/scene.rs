@@ -19,9 +19,19 @@
 //!
 //! [`SceneDesc::validate`] checks every number before a world is built; its errors name the
 //! body (or material, or scene field) and the field that is wrong.
+//!
+//! The same description is built in code with the builder methods of [`SceneDesc`],
+//! [`BodyDesc`], [`ShapeDesc`] and [`ContactDesc`] (their defaults are the file's defaults), and
+//! [`SceneDesc::to_ron`] writes it back: file, builder and RON are one-to-one.
+//!
+//! Sizes a file can ask for are bounded ([`MAX_BODIES`], [`MAX_PRISM_SIDES`],
+//! [`MAX_HULL_POINTS`], [`MAX_PARTS`], geodesic levels, [`MAX_FRAMES`]) so that a typo cannot
+//! make a run allocate gigabytes; ε_c must be small against the smallest dynamic body
+//! ([`MAX_EPSILON_REL`]), and [`SceneDesc::warnings`] says when it is merely large.
 
 use std::path::{Path, PathBuf};
 
+use rustc_hash::FxHashSet;
 use serde::{Deserialize, Serialize};
 
 use crate::error::SimError;
@@ -39,10 +49,14 @@ pub struct SceneDesc {
     /// Gravitational acceleration (world).
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
-    /// Simulated time to run (s), unless the command line says otherwise.
-    pub duration: f64,
+    /// Simulated time to run (s), unless the caller says otherwise (`impulse run --until`);
+    /// optional.
+    #[serde(default)]
+    pub duration: Option<f64>,
     /// Collision epsilon ε_c (length): bodies closer than this are in contact (thesis §2.2).
-    /// Two to three orders of magnitude below the body sizes.
+    /// Two to three orders of magnitude below the body sizes. Default `1e-4` (suits bodies of
+    /// a few centimetres and more in metres).
+    #[serde(default = "default_epsilon")]
     pub collision_epsilon: f64,
     /// Frames recorded per simulated second.
     #[serde(default = "default_output_rate")]
@@ -64,6 +78,42 @@ pub struct SceneDesc {
 /// would need gigabytes. Default `10_000_000`.
 pub const MAX_FRAMES: f64 = 1e7;
 
+/// Most bodies a scene may hold. Default `1_000_000`.
+pub const MAX_BODIES: usize = 1_000_000;
+
+/// Most sides of a [`ShapeDesc::Prism`] (a 1024-gon is a circle to 5e-6 of its radius).
+/// Default `1024`.
+pub const MAX_PRISM_SIDES: u32 = 1024;
+
+/// Most points of a [`ShapeDesc::Hull`]. Default `100_000`.
+pub const MAX_HULL_POINTS: usize = 100_000;
+
+/// Most parts of a [`ShapeDesc::Compound`]. Default `10_000`.
+pub const MAX_PARTS: usize = 10_000;
+
+/// Largest geodesic level of a [`ShapeDesc::GeodesicSphere`] (20·4⁶ = 81 920 faces).
+pub const MAX_GEODESIC_LEVEL: u32 = 7;
+
+/// Largest level of a polyhedral [`ShapeDesc::Ellipsoid`] (20·4⁵ = 20 480 faces).
+pub const MAX_ELLIPSOID_LEVEL: u32 = 6;
+
+/// Largest collision epsilon relative to the smallest half-size of a dynamic body (its
+/// smallest half extent, radius or half height): a body thinner than a few ε_c would be "in
+/// contact" with everything near it, and the microcollision speed √(2gε_c) would no longer be
+/// small. Above it the scene is refused. Default `0.1`.
+pub const MAX_EPSILON_REL: f64 = 0.1;
+
+/// Above this ratio of ε_c to the smallest dynamic half-size, [`SceneDesc::warnings`] warns
+/// (the thesis uses 1e-3 to 1e-2 of the body sizes). Default `0.02`.
+pub const WARN_EPSILON_REL: f64 = 0.02;
+
+/// Default collision epsilon of a scene that gives none (length). Default `1e-4`.
+pub const DEFAULT_COLLISION_EPSILON: f64 = 1e-4;
+
+fn default_epsilon() -> f64 {
+    DEFAULT_COLLISION_EPSILON
+}
+
 /// Smallest collision epsilon relative to the largest body extent in the scene. Distances are
 /// computed to about 1e-15 of the body size; an ε_c within a few orders of that makes every
 /// contact a rounding question and the event loop crawl. Default `1e-9`.
@@ -73,7 +123,7 @@ fn default_gravity() -> [f64; 3] {
     [0.0, 0.0, -9.81]
 }
 
-fn default_output_rate() -> f64 {
+pub(crate) fn default_output_rate() -> f64 {
     100.0
 }
 
@@ -115,10 +165,16 @@ pub struct MaterialPairDesc {
 #[serde(rename = "Accuracy", deny_unknown_fields, default)]
 pub struct AccuracyDesc {
     /// Local error per step of the rotation integrator (see
-    /// [`crate::body::Integrator::rotation_tolerance`]).
+    /// [`crate::body::Integrator::rotation_tolerance`]). Default `1e-12`.
     pub rotation_tolerance: f64,
-    /// Relative tolerance of the collision integrator of `impulse-response`.
+    /// Relative tolerance of the collision integrator of `impulse-response`. Default `1e-10`.
     pub collision_tolerance: f64,
+    /// e_max, the boosted restitution of a microcollision at full depth into the ε_c envelope
+    /// (thesis §3.5: 5.0); at least 1. Default `5.0`.
+    pub max_restitution: f64,
+    /// Whether a microcollision tries the reversing impulse first (thesis §3.5: yes). Default
+    /// `true`.
+    pub reversing: bool,
 }
 
 impl Default for AccuracyDesc {
@@ -126,6 +182,8 @@ impl Default for AccuracyDesc {
         Self {
             rotation_tolerance: 1e-12,
             collision_tolerance: 1e-10,
+            max_restitution: 5.0,
+            reversing: true,
         }
     }
 }
@@ -192,8 +250,9 @@ pub enum RotationDesc {
         /// Angle (degrees).
         degrees: f64,
     },
-    /// A unit quaternion `(x, y, z, w)` (normalised when read).
-    Quaternion([f64; 4]),
+    /// A quaternion `Quaternion(x, y, z, w)`, components in that order, scalar last
+    /// (normalised when read; the identity is `Quaternion(0.0, 0.0, 0.0, 1.0)`).
+    Quaternion(f64, f64, f64, f64),
 }
 
 /// How much a body weighs.
@@ -326,7 +385,7 @@ impl SceneDesc {
             .from_str(text)
             .map_err(|e| SimError::Parse {
                 source_name: source.to_string(),
-                message: e.to_string(),
+                message: with_hint(text, &e),
             })
     }
 
@@ -335,11 +394,11 @@ impl SceneDesc {
     /// # Errors
     /// [`SimError::Parse`] if serialisation fails (not expected for valid values).
     pub fn to_ron(&self) -> Result<String, SimError> {
-        ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default()).map_err(|e| {
-            SimError::Parse {
-                source_name: "<serialise>".into(),
-                message: e.to_string(),
-            }
+        let config = ron::ser::PrettyConfig::default()
+            .extensions(ron::extensions::Extensions::IMPLICIT_SOME);
+        ron::ser::to_string_pretty(self, config).map_err(|e| SimError::Parse {
+            source_name: "<serialise>".into(),
+            message: e.to_string(),
         })
     }
 
@@ -358,23 +417,24 @@ impl SceneDesc {
         if self.bodies.is_empty() {
             return Err(scene("bodies", "the scene has no bodies".into()));
         }
-        finite3(&self.gravity).map_err(|p| scene("gravity", p))?;
-        positive(self.duration).map_err(|p| scene("duration", p))?;
-        positive(self.collision_epsilon).map_err(|p| scene("collision_epsilon", p))?;
-        positive(self.output_rate).map_err(|p| scene("output_rate", p))?;
-        if self.output_rate * self.duration > MAX_FRAMES {
+        if self.bodies.len() > MAX_BODIES {
             return Err(scene(
-                "output_rate",
-                format!(
-                    "{} frames/s over {} s is more than {MAX_FRAMES:e} frames",
-                    self.output_rate, self.duration
-                ),
+                "bodies",
+                format!("{} bodies is more than {MAX_BODIES}", self.bodies.len()),
             ));
         }
-        positive(self.accuracy.rotation_tolerance)
-            .map_err(|p| scene("accuracy.rotation_tolerance", p))?;
-        positive(self.accuracy.collision_tolerance)
-            .map_err(|p| scene("accuracy.collision_tolerance", p))?;
+        finite3(&self.gravity).map_err(|p| scene("gravity", p))?;
+        if let Some(d) = self.duration {
+            positive(d).map_err(|p| scene("duration", p))?;
+        }
+        positive(self.collision_epsilon).map_err(|p| scene("collision_epsilon", p))?;
+        positive(self.output_rate).map_err(|p| scene("output_rate", p))?;
+        if let Some(d) = self.duration {
+            check_frames(d, self.output_rate).map_err(|p| scene("output_rate", p))?;
+        }
+        self.accuracy
+            .validate()
+            .map_err(|(f, p)| scene(&format!("accuracy.{f}"), p))?;
         check_contact(
             self.default_contact.friction,
             self.default_contact.restitution,
@@ -403,72 +463,15 @@ impl SceneDesc {
                 }
             }
         }
-        let mut names: Vec<&str> = Vec::with_capacity(self.bodies.len());
+        let mut names: FxHashSet<&str> = FxHashSet::default();
         for (k, b) in self.bodies.iter().enumerate() {
-            let what = if b.name.is_empty() {
-                format!("body #{k}")
-            } else {
-                format!("body \"{}\"", b.name)
-            };
-            let bad = |field: &str, problem: String| SimError::Invalid {
-                what: what.clone(),
-                field: field.into(),
-                problem,
-            };
-            if b.name.is_empty() {
-                return Err(bad("name", "is empty".into()));
-            }
-            if names.contains(&b.name.as_str()) {
-                return Err(bad("name", "another body has the same name".into()));
-            }
-            names.push(&b.name);
-            finite3(&b.position).map_err(|p| bad("position", p))?;
-            finite3(&b.velocity).map_err(|p| bad("velocity", p))?;
-            finite3(&b.angular_velocity).map_err(|p| bad("angular_velocity", p))?;
-            check_rotation(&b.rotation).map_err(|p| bad("rotation", p))?;
-            check_shape(&b.shape, true).map_err(|(f, p)| bad(&format!("shape.{f}"), p))?;
-            match b.mass {
-                Some(MassDesc::Density(d)) => positive(d).map_err(|p| bad("mass.Density", p))?,
-                Some(MassDesc::Mass(m)) => positive(m).map_err(|p| bad("mass.Mass", p))?,
-                None => {}
-            }
-            for (k, pm) in b.point_masses.iter().enumerate() {
-                positive(pm.mass).map_err(|p| bad(&format!("point_masses[{k}].mass"), p))?;
-                finite3(&pm.position)
-                    .map_err(|p| bad(&format!("point_masses[{k}].position"), p))?;
-            }
-            if !b.point_masses.is_empty() && b.motion != MotionDesc::Dynamic {
-                return Err(bad(
-                    "point_masses",
-                    "only dynamic bodies take point masses".into(),
-                ));
-            }
-            match b.motion {
-                MotionDesc::Dynamic | MotionDesc::Fixed => {}
-                MotionDesc::Spinner { axis, rate } => {
-                    nonzero3(&axis).map_err(|p| bad("motion.axis", p))?;
-                    finite(rate).map_err(|p| bad("motion.rate", p))?;
-                }
-                MotionDesc::Oscillator {
-                    axis,
-                    amplitude,
-                    frequency,
-                    phase,
-                } => {
-                    nonzero3(&axis).map_err(|p| bad("motion.axis", p))?;
-                    non_negative(amplitude).map_err(|p| bad("motion.amplitude", p))?;
-                    non_negative(frequency).map_err(|p| bad("motion.frequency", p))?;
-                    finite(phase).map_err(|p| bad("motion.phase", p))?;
-                }
-            }
-            if !matches!(b.motion, MotionDesc::Dynamic)
-                && (b.velocity != [0.0; 3] || b.angular_velocity != [0.0; 3])
-            {
-                return Err(bad(
-                    "velocity",
-                    "only dynamic bodies take an initial velocity (scripted motion sets its own)"
-                        .into(),
-                ));
+            b.validate(k)?;
+            if !names.insert(&b.name) {
+                return Err(SimError::Invalid {
+                    what: format!("body \"{}\"", b.name),
+                    field: "name".into(),
+                    problem: "another body has the same name".into(),
+                });
             }
         }
         let extent = self
@@ -476,6 +479,20 @@ impl SceneDesc {
             .iter()
             .map(|b| shape_extent(&b.shape))
             .fold(0.0, f64::max);
+        if let Some((name, size)) = self.thinnest_dynamic_body() {
+            if self.collision_epsilon > MAX_EPSILON_REL * size {
+                return Err(scene(
+                    "collision_epsilon",
+                    format!(
+                        "{:e} is more than {MAX_EPSILON_REL} × the half-size {size:e} of body \"{name}\", \
+                         the thinnest dynamic body: contact would be declared {:.0} % of its size \
+                         away (use 1e-3 to 1e-2 of the body sizes)",
+                        self.collision_epsilon,
+                        100.0 * self.collision_epsilon / size
+                    ),
+                ));
+            }
+        }
         if self.collision_epsilon < MIN_EPSILON_REL * extent {
             return Err(scene(
                 "collision_epsilon",
@@ -494,6 +511,158 @@ impl SceneDesc {
         }
         Ok(())
     }
+}
+
+impl BodyDesc {
+    /// Checks every field of one body that can be checked without building it (finite
+    /// numbers, positive sizes and masses, bounded counts); `index` is its place in the scene,
+    /// for the error when it has no name.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the body and the field.
+    pub fn validate(&self, index: usize) -> Result<(), SimError> {
+        let b = self;
+        let what = if b.name.is_empty() {
+            format!("body #{index}")
+        } else {
+            format!("body \"{}\"", b.name)
+        };
+        let bad = |field: &str, problem: String| SimError::Invalid {
+            what: what.clone(),
+            field: field.into(),
+            problem,
+        };
+        if b.name.is_empty() {
+            return Err(bad("name", "is empty".into()));
+        }
+        finite3(&b.position).map_err(|p| bad("position", p))?;
+        finite3(&b.velocity).map_err(|p| bad("velocity", p))?;
+        finite3(&b.angular_velocity).map_err(|p| bad("angular_velocity", p))?;
+        check_rotation(&b.rotation).map_err(|p| bad("rotation", p))?;
+        check_shape(&b.shape, true).map_err(|(f, p)| bad(&format!("shape.{f}"), p))?;
+        match b.mass {
+            Some(MassDesc::Density(d)) => positive(d).map_err(|p| bad("mass.Density", p))?,
+            Some(MassDesc::Mass(m)) => positive(m).map_err(|p| bad("mass.Mass", p))?,
+            None => {}
+        }
+        for (k, pm) in b.point_masses.iter().enumerate() {
+            positive(pm.mass).map_err(|p| bad(&format!("point_masses[{k}].mass"), p))?;
+            finite3(&pm.position).map_err(|p| bad(&format!("point_masses[{k}].position"), p))?;
+        }
+        if !b.point_masses.is_empty() && b.motion != MotionDesc::Dynamic {
+            return Err(bad(
+                "point_masses",
+                "only dynamic bodies take point masses".into(),
+            ));
+        }
+        match b.motion {
+            MotionDesc::Dynamic | MotionDesc::Fixed => {}
+            MotionDesc::Spinner { axis, rate } => {
+                nonzero3(&axis).map_err(|p| bad("motion.axis", p))?;
+                finite(rate).map_err(|p| bad("motion.rate", p))?;
+            }
+            MotionDesc::Oscillator {
+                axis,
+                amplitude,
+                frequency,
+                phase,
+            } => {
+                nonzero3(&axis).map_err(|p| bad("motion.axis", p))?;
+                non_negative(amplitude).map_err(|p| bad("motion.amplitude", p))?;
+                non_negative(frequency).map_err(|p| bad("motion.frequency", p))?;
+                finite(phase).map_err(|p| bad("motion.phase", p))?;
+            }
+        }
+        if !matches!(b.motion, MotionDesc::Dynamic)
+            && (b.velocity != [0.0; 3] || b.angular_velocity != [0.0; 3])
+        {
+            return Err(bad(
+                "velocity",
+                "only dynamic bodies take an initial velocity (scripted motion sets its own)"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl AccuracyDesc {
+    fn validate(&self) -> Result<(), (&'static str, String)> {
+        positive(self.rotation_tolerance).map_err(|p| ("rotation_tolerance", p))?;
+        positive(self.collision_tolerance).map_err(|p| ("collision_tolerance", p))?;
+        if !(self.max_restitution.is_finite() && self.max_restitution >= 1.0) {
+            return Err((
+                "max_restitution",
+                format!("{} must be finite and ≥ 1", self.max_restitution),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl SceneDesc {
+    /// Things that are allowed but probably not meant: ε_c larger than [`WARN_EPSILON_REL`]
+    /// of the thinnest dynamic body. Each is one sentence naming the body or field.
+    #[must_use]
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some((name, size)) = self.thinnest_dynamic_body() {
+            if self.collision_epsilon > WARN_EPSILON_REL * size {
+                out.push(format!(
+                    "collision_epsilon {:e} is {:.1} % of the half-size {size:e} of body \"{name}\" \
+                     (the thesis uses 0.1 to 1 %): contacts will be coarse",
+                    self.collision_epsilon,
+                    100.0 * self.collision_epsilon / size
+                ));
+            }
+        }
+        out
+    }
+
+    /// The dynamic body with the smallest half-size (smallest half extent, radius or half
+    /// height of its shape or of its largest part) and that size; `None` without dynamic
+    /// bodies or when the sizes are not known without reading files.
+    fn thinnest_dynamic_body(&self) -> Option<(&str, f64)> {
+        self.bodies
+            .iter()
+            .filter(|b| b.motion == MotionDesc::Dynamic)
+            .filter_map(|b| shape_thickness(&b.shape).map(|t| (b.name.as_str(), t)))
+            .filter(|(_, t)| *t > 0.0)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+}
+
+/// Frames a run of `duration` at `rate` frames/s records must stay below [`MAX_FRAMES`].
+///
+/// # Errors
+/// A sentence saying how many frames that would be.
+pub fn check_frames(duration: f64, rate: f64) -> Result<(), String> {
+    if duration * rate > MAX_FRAMES {
+        return Err(format!(
+            "{rate} frames/s over {duration} s is more than {MAX_FRAMES:e} frames"
+        ));
+    }
+    Ok(())
+}
+
+/// RON's message, plus how to write the value it choked on when that is a rotation.
+fn with_hint(text: &str, e: &ron::error::SpannedError) -> String {
+    let mut message = e.to_string();
+    let line = text
+        .lines()
+        .nth(e.span.start.line.saturating_sub(1))
+        .unwrap_or("");
+    if line.contains("Quaternion") {
+        message.push_str(
+            " (a quaternion is written Quaternion(x, y, z, w), four numbers, scalar last: \
+             Quaternion(0.0, 0.0, 0.0, 1.0) is no rotation)",
+        );
+    } else if line.contains("AxisAngle") {
+        message.push_str(
+            " (an axis-angle rotation is written AxisAngle(axis: (x, y, z), degrees: a))",
+        );
+    }
+    message
 }
 
 impl Scene {
@@ -572,11 +741,14 @@ fn check_rotation(r: &RotationDesc) -> Result<(), String> {
             nonzero3(axis)?;
             finite(*degrees)
         }
-        RotationDesc::Quaternion(q) => {
-            if q.iter().all(|x| x.is_finite()) && q.iter().any(|&x| x != 0.0) {
+        RotationDesc::Quaternion(x, y, z, w) => {
+            let q = [*x, *y, *z, *w];
+            if q.iter().all(|c| c.is_finite()) && q.iter().any(|&c| c != 0.0) {
                 Ok(())
             } else {
-                Err(format!("quaternion {q:?} is not finite and non-zero"))
+                Err(format!(
+                    "Quaternion({x}, {y}, {z}, {w}) (x, y, z, w) must be finite and not all zero"
+                ))
             }
         }
     }
@@ -605,6 +777,31 @@ fn shape_extent(s: &ShapeDesc) -> f64 {
     }
 }
 
+/// The smallest half-size of a (validated) shape: its smallest half extent, radius, half
+/// height or semi-axis, or for a compound that of its largest part (the parts hold each other
+/// together); `None` for an OBJ file or a hull (not measured without building it).
+pub(crate) fn shape_thickness(s: &ShapeDesc) -> Option<f64> {
+    match s {
+        ShapeDesc::Sphere { radius } | ShapeDesc::GeodesicSphere { radius, .. } => Some(*radius),
+        ShapeDesc::Box { half_extents } => {
+            Some(half_extents.iter().copied().fold(f64::INFINITY, f64::min))
+        }
+        ShapeDesc::Ellipsoid { semi_axes, .. } => {
+            Some(semi_axes.iter().copied().fold(f64::INFINITY, f64::min))
+        }
+        ShapeDesc::Prism {
+            radius,
+            half_height,
+            ..
+        } => Some(radius.min(*half_height)),
+        ShapeDesc::Hull { .. } | ShapeDesc::Obj { .. } => None,
+        ShapeDesc::Compound { parts } => parts
+            .iter()
+            .filter_map(|p| shape_thickness(&p.shape))
+            .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t)))),
+    }
+}
+
 fn check_contact(friction: f64, restitution: f64) -> Result<(), (&'static str, String)> {
     non_negative(friction).map_err(|p| ("friction", p))?;
     if !(restitution.is_finite() && (0.0..=1.0).contains(&restitution)) {
@@ -625,10 +822,13 @@ fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
         }
         ShapeDesc::GeodesicSphere { radius, level } => {
             positive(*radius).map_err(|p| err("radius", p))?;
-            if (1..=7).contains(level) {
+            if (1..=MAX_GEODESIC_LEVEL).contains(level) {
                 Ok(())
             } else {
-                Err(err("level", format!("{level} must lie in 1..=7")))
+                Err(err(
+                    "level",
+                    format!("{level} must lie in 1..={MAX_GEODESIC_LEVEL}"),
+                ))
             }
         }
         ShapeDesc::Ellipsoid { semi_axes, level } => {
@@ -636,9 +836,10 @@ fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
                 positive(*x).map_err(|p| err("semi_axes", p))?;
             }
             match level {
-                Some(l) if !(1..=6).contains(l) => {
-                    Err(err("level", format!("{l} must lie in 1..=6")))
-                }
+                Some(l) if !(1..=MAX_ELLIPSOID_LEVEL).contains(l) => Err(err(
+                    "level",
+                    format!("{l} must lie in 1..={MAX_ELLIPSOID_LEVEL}"),
+                )),
                 _ => Ok(()),
             }
         }
@@ -647,8 +848,11 @@ fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
             radius,
             half_height,
         } => {
-            if *sides < 3 {
-                return Err(err("sides", format!("{sides} must be ≥ 3")));
+            if !(3..=MAX_PRISM_SIDES).contains(sides) {
+                return Err(err(
+                    "sides",
+                    format!("{sides} must lie in 3..={MAX_PRISM_SIDES}"),
+                ));
             }
             positive(*radius).map_err(|p| err("radius", p))?;
             positive(*half_height).map_err(|p| err("half_height", p))
@@ -658,6 +862,12 @@ fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
                 return Err(err(
                     "points",
                     format!("{} points cannot enclose a volume (need ≥ 4)", points.len()),
+                ));
+            }
+            if points.len() > MAX_HULL_POINTS {
+                return Err(err(
+                    "points",
+                    format!("{} points is more than {MAX_HULL_POINTS}", points.len()),
                 ));
             }
             for (k, p) in points.iter().enumerate() {
@@ -678,6 +888,12 @@ fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
             }
             if parts.is_empty() {
                 return Err(err("parts", "a compound needs at least one part".into()));
+            }
+            if parts.len() > MAX_PARTS {
+                return Err(err(
+                    "parts",
+                    format!("{} parts is more than {MAX_PARTS}", parts.len()),
+                ));
             }
             for (k, part) in parts.iter().enumerate() {
                 finite3(&part.position).map_err(|e| err(&format!("parts[{k}].position"), e))?;

@@ -1,0 +1,463 @@
+//! Checking a pair: closest features piece by piece, the pair's next key, and resolving a
+//! collision at the top of the heap (with the fallback when the response fails).
+
+use glam::DVec3;
+use impulse_collide::schedule::{Mover, free_coefficients};
+use impulse_collide::{Closest, Convex, FeaturePair, Motion, depth, patch, shape};
+
+use super::{BodyHandle, ContactEvent, ContactFailure, MAX_FAILURES_KEPT, Material, World};
+use crate::contact::{self, ContactKind};
+use crate::error::SimError;
+
+/// Closest points closer than this, relative to the sum of the two bodies' radii, give no
+/// contact normal: their direction would be rounding noise (two faces exactly touching
+/// report points 1e-17 apart in any direction); the separating axis
+/// ([`impulse_collide::depth::separating_axis`]) gives it instead. Default `1e-9`.
+pub const NORMAL_FROM_POINTS_REL: f64 = 1e-9;
+
+/// The result of checking a pair: the closest piece pair, and the distance and normal of
+/// every piece pair examined (for the time-of-impact bound, eq. 2.1).
+pub(super) struct Scan {
+    /// Smallest distance (0 when touching or penetrating).
+    distance: f64,
+    /// Closest point on the first body (world).
+    point_a: DVec3,
+    /// Closest point on the second body (world).
+    point_b: DVec3,
+    /// Contact normal of the closest piece pair, from the second body toward the first.
+    normal: Option<DVec3>,
+    /// Smallest key of the piece pairs other than the closest one (absolute time).
+    others_key: f64,
+    /// The closest piece pair (piece indices of the two bodies).
+    pieces: (usize, usize),
+    /// How deep the bodies interpenetrate when touching (0 otherwise).
+    depth: f64,
+    /// The two bodies' motions at the check (for their time-of-impact bound).
+    motions: (Motion, Motion),
+}
+
+impl World {
+    /// Checks a pair now, piece pair by piece pair (thesis eq. 2.1): the closest piece pair
+    /// decides contact, and every piece pair gets its own time-of-impact bound along its own
+    /// separating direction, since a non-convex body can approach another at several places in
+    /// different directions. Piece pairs that cannot matter are pruned
+    /// ([`impulse_collide::schedule::Schedule::can_skip`]). A piece pair found touching or
+    /// overlapping with no normal seen before (bodies placed touching) gets its normal from
+    /// [`impulse_collide::depth`].
+    fn query(&mut self, (a, b): (u32, u32)) -> Scan {
+        let time = self.time;
+        let schedule = self.schedule;
+        #[cfg(test)]
+        let toi_scale = self.faults.toi_scale;
+        #[cfg(not(test))]
+        let toi_scale = 1.0;
+        // Direct field access: the bodies and the pair table are borrowed at once.
+        let live = "internal ids name live bodies";
+        let ba = self.slots[a as usize].body.as_ref().expect(live);
+        let bb = self.slots[b as usize].body.as_ref().expect(live);
+        let (pieces_a, pieces_b) = (ba.shape.pieces(), bb.shape.pieces());
+        let (na, nb) = (pieces_a.len(), pieces_b.len());
+        let (motion_a, motion_b) = (ba.motion(self.gravity), bb.motion(self.gravity));
+        let free = free_coefficients(&motion_a, ba.max_reach())
+            .zip(free_coefficients(&motion_b, bb.max_reach()));
+        let state = self.pairs.entry((a, b)).or_default();
+        if state.features.len() != na * nb {
+            state.features = vec![FeaturePair::default(); na * nb];
+            state.normals = vec![None; na * nb];
+        }
+        // Piece pairs by increasing bounding-sphere lower bound on their distance.
+        let mut order: Vec<(f64, usize, usize)> = Vec::with_capacity(na * nb);
+        for (i, pa) in pieces_a.iter().enumerate() {
+            let ca = ba.pose.transform_point(pa.center);
+            for (j, pb) in pieces_b.iter().enumerate() {
+                let lb = ca.distance(bb.pose.transform_point(pb.center)) - pa.radius - pb.radius;
+                order.push((lb, i, j));
+            }
+        }
+        order.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+        let mut best: Option<(f64, Closest, usize)> = None;
+        let mut keys: Vec<(usize, f64)> = Vec::with_capacity(order.len());
+        let mut min_key = f64::INFINITY;
+        let mut checks = 0u64;
+        let mut depth = 0.0f64;
+        let mut touching = false;
+        for &(lb, i, j) in &order {
+            if let Some((fa, fb)) = free {
+                if schedule.can_skip(lb, best.as_ref().map(|x| x.0), fa, fb, min_key - time) {
+                    continue;
+                }
+            }
+            let (pa, pb) = (&pieces_a[i], &pieces_b[j]);
+            let (pose_a, pose_b) = (ba.pose * pa.pose, bb.pose * pb.pose);
+            let slot = i * nb + j;
+            let c = shape::convex_closest(
+                &pa.convex,
+                &pose_a,
+                &pb.convex,
+                &pose_b,
+                state.features[slot],
+            );
+            checks += 1;
+            state.features[slot] = c.features;
+            if !c.penetrating && c.distance > NORMAL_FROM_POINTS_REL * (ba.r_max + bb.r_max) {
+                if let Some(dir) = c.direction() {
+                    state.normals[slot] = Some(-dir);
+                }
+            } else {
+                // Touching, overlapping, or so close that the closest points' direction is
+                // rounding noise: the separating axis.
+                let p = depth::separating_axis(&pa.convex, &pose_a, &pb.convex, &pose_b);
+                if p.normal.is_finite() {
+                    state.normals[slot] = Some(p.normal);
+                }
+                if c.penetrating {
+                    touching = true;
+                    depth = depth.max(p.depth);
+                }
+            }
+            let d = if c.penetrating { 0.0 } else { c.distance };
+            let key = match state.normals[slot] {
+                None => time,
+                Some(n) => {
+                    let (ma, mb) = (
+                        Mover {
+                            motion: &motion_a,
+                            reach: ba.reach[i],
+                        },
+                        Mover {
+                            motion: &motion_b,
+                            reach: bb.reach[j],
+                        },
+                    );
+                    time + toi_scale * schedule.piece_toi(d, 0.0, n, false, ma, mb)
+                }
+            };
+            min_key = min_key.min(key);
+            keys.push((slot, key));
+            if best.as_ref().is_none_or(|bst| d < bst.0) {
+                best = Some((d, c, slot));
+            }
+        }
+        self.counters.pair_checks += checks.max(1);
+        let Some((d, c, slot)) = best else {
+            unreachable!("a shape has at least one piece")
+        };
+        let others_key = keys
+            .iter()
+            .filter(|(s, _)| *s != slot)
+            .map(|(_, k)| *k)
+            .fold(f64::INFINITY, f64::min);
+        let normal = state.normals[slot];
+        if touching {
+            self.counters.touching_checks += 1;
+            self.counters.max_penetration = self.counters.max_penetration.max(depth);
+        }
+        self.counters.min_distance = self.counters.min_distance.min(d);
+        Scan {
+            distance: d,
+            point_a: c.point_a,
+            point_b: c.point_b,
+            normal,
+            others_key,
+            pieces: (slot / nb, slot % nb),
+            depth,
+            motions: (motion_a, motion_b),
+        }
+    }
+
+    /// A check plus a conservative time-of-impact bound (absolute time); no response. Used
+    /// for pairs that are not at the top of the heap (new pairs, re-keyed pairs).
+    pub(super) fn bound(&mut self, pair: (u32, u32)) -> f64 {
+        let scan = self.query(pair);
+        self.key_for(pair, &scan, false)
+    }
+
+    /// The key of a pair: the earliest time any of its piece pairs could close the gap to the
+    /// target (`impulse_collide::schedule`). Only the closest piece pair of a pair just checked
+    /// at the top of the heap (`at_top`) gets the gap floor, which guarantees progress;
+    /// elsewhere the bound stays conservative, so a pair re-keyed while touching comes back
+    /// to the top at once.
+    fn key_for(&self, (a, b): (u32, u32), scan: &Scan, at_top: bool) -> f64 {
+        let Some(n) = scan.normal else {
+            return self.time; // touching with no known normal: check again now.
+        };
+        #[cfg(test)]
+        let toi_scale = self.faults.toi_scale;
+        #[cfg(not(test))]
+        let toi_scale = 1.0;
+        let (ba, bb) = (self.b(a), self.b(b));
+        let tau = self.schedule.piece_toi(
+            scan.distance,
+            scan.depth,
+            n,
+            at_top,
+            Mover {
+                motion: &scan.motions.0,
+                reach: ba.reach[scan.pieces.0],
+            },
+            Mover {
+                motion: &scan.motions.1,
+                reach: bb.reach[scan.pieces.1],
+            },
+        );
+        (self.time + toi_scale * tau).min(scan.others_key)
+    }
+
+    /// Checks the top pair, resolves a collision, re-keys, and applies the hysteresis rule.
+    pub(super) fn check_top(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
+        let scan = self.query(pair);
+        let mut hit = false;
+        if scan.distance < self.collision_epsilon() {
+            if let Some(n) = scan.normal {
+                if let Some(x) = self.contact_point(pair, &scan, n) {
+                    hit = self.resolve(pair, x, n, scan.distance);
+                }
+            }
+            // With no normal at all (not even from the penetration query), the pair is checked
+            // again at once; the stall guard ends that if it persists.
+        }
+        if hit {
+            self.rekey_others(pair)?;
+        }
+        let key = if hit {
+            let scan = self.query(pair);
+            self.key_for(pair, &scan, true)
+        } else {
+            self.key_for(pair, &scan, true)
+        };
+        let still_close = self
+            .hash
+            .as_ref()
+            .is_some_and(|(h, _)| h.is_close(pair.0, pair.1).unwrap_or(false));
+        self.heap
+            .settle_after_check(pair, still_close, key)
+            .map_err(|e| self.runtime(format!("collision heap: {e}")))?;
+        if !still_close {
+            self.pairs.remove(&pair);
+        }
+        Ok(())
+    }
+
+    /// Where the contact of a checked pair acts. For two polyhedral pieces: the centre of
+    /// their near vertices that approach ([`impulse_collide::patch::near_vertices`]: every
+    /// vertex within ε_c of the other or inside it), so that a body resting flat is pushed
+    /// through its support rather than at a corner, a rocking one where it comes down, and a
+    /// sinking corner is found even when the closest-features query returns only a witness;
+    /// the closest points' midpoint joins them when it lies apart (an edge across an edge);
+    /// `None` when none of them approaches (nothing presses). Without near vertices, and for
+    /// smooth pieces, the midpoint of the closest points.
+    fn contact_point(&self, (a, b): (u32, u32), scan: &Scan, n: DVec3) -> Option<DVec3> {
+        let mid = 0.5 * (scan.point_a + scan.point_b);
+        let (ba, bb) = (self.b(a), self.b(b));
+        let (pa, pb) = (
+            &ba.shape.pieces()[scan.pieces.0],
+            &bb.shape.pieces()[scan.pieces.1],
+        );
+        let (Convex::Polyhedron(x), Convex::Polyhedron(y)) = (&pa.convex, &pb.convex) else {
+            return Some(mid);
+        };
+        let eps = self.collision_epsilon();
+        let near = patch::near_vertices(x, &(ba.pose * pa.pose), y, &(bb.pose * pb.pose), eps);
+        if near.is_empty() {
+            return Some(mid);
+        }
+        // The closest points' midpoint is another contact place when it lies outside the near
+        // vertices' circle: an edge crossing an edge (no vertex there), as a block landing
+        // askew on another. Inside it, it is one of them or between them.
+        let centre = near.iter().sum::<DVec3>() / near.len() as f64;
+        let spread = near.iter().map(|p| p.distance(centre)).fold(0.0, f64::max);
+        let mut near = near;
+        if mid.distance(centre) > spread + eps {
+            near.push(mid);
+        }
+        let rest = contact::APPROACH_FLOOR_REL * (2.0 * self.gravity.length() * eps).sqrt();
+        let pressing: Vec<DVec3> = near
+            .into_iter()
+            .filter(|&p| (ba.point_velocity(p) - bb.point_velocity(p)).dot(n) < -rest)
+            .collect();
+        if pressing.is_empty() {
+            return None;
+        }
+        Some(pressing.iter().sum::<DVec3>() / pressing.len() as f64)
+    }
+
+    /// After an impulse on a pair, every other heap pair of its two bodies is stale (thesis
+    /// §2.4.3) — of the bodies whose motion the impulse changed: a fixed or scripted body's
+    /// pairs stay valid.
+    fn rekey_others(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
+        let mut others: Vec<(u32, u32)> = [pair.0, pair.1]
+            .into_iter()
+            .filter(|&b| self.b(b).is_dynamic())
+            .flat_map(|b| self.heap.pairs_of(b))
+            .filter(|p| *p != pair)
+            .collect();
+        others.sort_unstable();
+        others.dedup();
+        for p in others {
+            let key = self.bound(p);
+            self.heap
+                .set_toi(p, key)
+                .map_err(|e| self.runtime(format!("collision heap: {e}")))?;
+        }
+        Ok(())
+    }
+
+    /// Resolves a contact of pair `(i, j)` at world point `x` with normal `n` (from j toward
+    /// i) and distance `d`: the response of `impulse-response`, or, when it fails or its
+    /// result is not finite, the fallback (a frictionless Newton impulse along the normal),
+    /// reported. Returns whether an impulse was applied.
+    fn resolve(&mut self, (i, j): (u32, u32), x: DVec3, n: DVec3, d: f64) -> bool {
+        let (eps, gravity) = (self.collision_epsilon(), self.gravity);
+        let g = gravity.length();
+        let mat = self.material(i, j);
+        let model = self.model;
+        #[cfg(test)]
+        let forced = self
+            .faults
+            .fail_pair
+            .is_some_and(|(p, q)| (p, q) == (i, j) || (q, p) == (i, j));
+        #[cfg(not(test))]
+        let forced = false;
+        let (bi, bj) = self.two_mut(i, j);
+        let saved = ((bi.velocity, bi.omega), (bj.velocity, bj.omega));
+        let before = (
+            bi.kinetic_energy() + bj.kinetic_energy(),
+            bi.linear_momentum() + bj.linear_momentum(),
+        );
+        let outcome = if forced {
+            Err("fault injected by a test".to_string())
+        } else {
+            contact::resolve(bi, bj, x, n, d, eps, gravity, mat, &model)
+        };
+        let finite = bi.velocity.is_finite()
+            && bi.omega.is_finite()
+            && bj.velocity.is_finite()
+            && bj.omega.is_finite();
+        let (kind, impulse) = match outcome {
+            Ok(None) => return false,
+            Ok(Some(r)) if finite => r,
+            failed => {
+                // Undo whatever was applied, then the fallback.
+                (bi.velocity, bi.omega) = saved.0;
+                (bj.velocity, bj.omega) = saved.1;
+                let why = match failed {
+                    Err(e) => e,
+                    _ => "the impulse made a velocity non-finite".to_string(),
+                };
+                // A microcollision (thesis eq. 3.18) reverses the normal velocity, as the
+                // reversing impulse would; anything faster keeps the material's restitution.
+                let micro = g > 0.0
+                    && -(bi.point_velocity(x) - bj.point_velocity(x)).dot(n)
+                        < (2.0 * g * eps).sqrt();
+                let e = if micro { 1.0 } else { mat.restitution };
+                let p = contact::resolve_fallback(bi, bj, x, n, e);
+                let message = match p {
+                    Some(p) => format!(
+                        "{why}; resolved by a frictionless impulse {:.6e} along the normal",
+                        p.length()
+                    ),
+                    None => format!("{why}; no impulse applied (the bodies are not approaching)"),
+                };
+                self.counters.unresolved += 1;
+                if self.failures.len() < MAX_FAILURES_KEPT {
+                    let (a, b) = (self.handle_of(i), self.handle_of(j));
+                    self.failures.push(ContactFailure {
+                        time: self.time,
+                        a,
+                        b,
+                        message,
+                    });
+                }
+                match p {
+                    Some(p) => (ContactKind::Fallback, p),
+                    None => return false,
+                }
+            }
+        };
+        match kind {
+            ContactKind::Collision => self.counters.collisions += 1,
+            ContactKind::Microcollision => self.counters.microcollisions += 1,
+            ContactKind::Reversing => {
+                self.counters.microcollisions += 1;
+                self.counters.reversing += 1;
+            }
+            ContactKind::Fallback => {}
+        }
+        let (bi, bj) = (self.b(i), self.b(j));
+        let event = ContactEvent {
+            time: self.time,
+            a: self.handle_of(i),
+            b: self.handle_of(j),
+            kind,
+            impulse,
+            point: x,
+            normal: n,
+            energy_before: before.0,
+            energy_after: bi.kinetic_energy() + bj.kinetic_energy(),
+            momentum_before: before.1,
+            momentum_after: bi.linear_momentum() + bj.linear_momentum(),
+        };
+        if let Some(log) = &mut self.events {
+            log.push(event);
+        }
+        self.recent.push(event);
+        true
+    }
+
+    /// A pair checked [`super::MAX_CHECKS_WITHOUT_PROGRESS`] times without time advancing:
+    /// the two bodies get a separating push (the fallback impulse with restitution 1 along
+    /// the last normal, or nothing if none is known), reported as unresolved, and the loop
+    /// goes on.
+    pub(super) fn break_stall(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
+        self.stalled_checks = 0;
+        let scan = self.query(pair);
+        let (i, j) = pair;
+        let message = match scan.normal {
+            Some(n) => {
+                let x = 0.5 * (scan.point_a + scan.point_b);
+                let (bi, bj) = self.two_mut(i, j);
+                let p = contact::resolve_fallback(bi, bj, x, n, 1.0);
+                format!(
+                    "the loop stalled on this pair ({} checks without time advancing); \
+                     separating impulse {:.3e}",
+                    super::MAX_CHECKS_WITHOUT_PROGRESS,
+                    p.map_or(0.0, |p| p.length())
+                )
+            }
+            None => "the loop stalled on this pair with no contact normal".to_string(),
+        };
+        self.counters.unresolved += 1;
+        if self.failures.len() < MAX_FAILURES_KEPT {
+            let (a, b): (BodyHandle, BodyHandle) = (self.handle_of(i), self.handle_of(j));
+            self.failures.push(ContactFailure {
+                time: self.time,
+                a,
+                b,
+                message,
+            });
+        }
+        self.rekey_others(pair)?;
+        self.check_top(pair)
+    }
+
+    fn material(&self, i: u32, j: u32) -> Material {
+        self.materials.get(self.b(i).material, self.b(j).material)
+    }
+
+    /// Two distinct bodies, mutably.
+    fn two_mut(&mut self, i: u32, j: u32) -> (&mut crate::body::Body, &mut crate::body::Body) {
+        assert_ne!(i, j, "a pair is two different bodies");
+        let (i, j) = (i as usize, j as usize);
+        let (x, y) = if i < j {
+            let (lo, hi) = self.slots.split_at_mut(j);
+            (&mut lo[i], &mut hi[0])
+        } else {
+            let (lo, hi) = self.slots.split_at_mut(i);
+            (&mut hi[0], &mut lo[j])
+        };
+        (
+            x.body.as_mut().expect("internal ids name live bodies"),
+            y.body.as_mut().expect("internal ids name live bodies"),
+        )
+    }
+}

@@ -1,0 +1,675 @@
+//! The world: its bodies, and the event loop that moves them (thesis §1.2, §2.3.1, §2.4.3).
+//!
+//! A [`World`] is built from a scene ([`World::from_scene`]) or in code ([`World::new`], then
+//! [`World::add_body`]); bodies are named by [`BodyHandle`]s that stay valid while other bodies
+//! come and go. Between steps a program may move bodies, change their velocities, push them
+//! with impulses and loads, and read what happened (see the methods' groups below and
+//! `api.rs`).
+//!
+//! One step of the event loop ([`World::step_until`], `step.rs`) is the `advance` algorithm
+//! of thesis §2.4.3:
+//!
+//! 1. `t_end` ← the earliest key of the collision heap (capped by the caller's time limit and
+//!    the next evaluation of a load function).
+//! 2. Every moving body gets the box enclosing its swept volume over `[t, t_end]` (its motion's
+//!    swept centre-of-mass box grown by r_max + ε_c); the coherent spatial hash updates its
+//!    close counters, and every pair that became close (0→1) is checked and inserted in the
+//!    heap. A new pair may have an earlier key: `t_end` shrinks (the boxes still cover it).
+//! 3. Every body advances to `t_end`, independently (in parallel with rayon; each body's result
+//!    does not depend on the thread count, so runs are deterministic).
+//! 4. If the top pair is due, it is checked (`check.rs`): closer than ε_c and approaching means
+//!    a collision, resolved by `impulse-response` (a microcollision at low approach speed,
+//!    §3.5); the pair and, after an impulse, every heap pair of the two bodies get new
+//!    time-of-impact bounds; the pair leaves the heap only here, at the top, when it is no
+//!    longer close (hysteresis).
+//!
+//! When to check a pair again is `impulse_collide::schedule`'s policy: a separated pair when
+//! it could come within half of ε_c, a pair just checked at the top never sooner than a gap
+//! floor allows, a pair leaving contact when it could be back. Rotation in the bounds uses
+//! each piece's rotational reach ([`Body::reach`]): a ball's distance to anything moves only
+//! with its centre, so its bound is exact.
+//!
+//! **Touching at the start is contact.** Bodies may be placed touching, or overlapping by up
+//! to ε_c; only a deeper overlap is refused ([`SimError::Overlap`], with the depth).
+//! Pairs at zero distance get their normal from `impulse_collide::depth`.
+//!
+//! **No run is lost to one pair.** A collision the response cannot resolve (its step cap, a
+//! degenerate collision matrix, a non-finite result) is resolved by a frictionless Newton
+//! impulse along the normal instead ([`ContactKind::Fallback`]), reported in the contact log,
+//! the counters ([`Counters::unresolved`]) and [`World::failures`], and the run goes on.
+//! [`World::step_until`] fails only for invalid input or a state that is no longer finite,
+//! and then leaves the world exactly as it was.
+
+mod api;
+mod check;
+mod materials;
+mod step;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::DVec3;
+use impulse_broadphase::CoherentHash;
+use impulse_collide::schedule::Schedule;
+use impulse_collide::{CollisionHeap, FeaturePair};
+use rustc_hash::FxHashMap;
+
+pub use api::{Load, LoadFn};
+pub use materials::Material;
+
+use crate::body::{Body, Integrator};
+use crate::contact::{ContactKind, ContactModel};
+use crate::error::SimError;
+use crate::monitor::PenetrationMonitor;
+use crate::scene::{Scene, SceneDesc};
+use materials::Materials;
+
+/// Checks in a row that may happen without simulated time advancing before the loop gives the
+/// pair it keeps checking a separating push (a stall, see [`Counters::unresolved`]). A legal
+/// cascade of simultaneous contacts (a stack settling) takes a few checks per pair. Default
+/// `10_000`.
+pub const MAX_CHECKS_WITHOUT_PROGRESS: u64 = 10_000;
+
+/// Stalls broken at one instant before the run is declared stuck: an error, and the world is
+/// left as it was before the step (a scene far outside what the loop can resolve, e.g.
+/// gravity of 1e308). Default `3`.
+pub const MAX_STALLS_PER_INSTANT: u64 = 3;
+
+/// Swept boxes of moving bodies are sized for steps up to this many of their own radii of
+/// travel when the tile sizes are chosen (thesis §2.4.3: "tile sizes based on the bodies'
+/// maximum radii"). Default `4.0`.
+pub const SWEEP_ALLOWANCE: f64 = 4.0;
+
+/// Below this many bodies, a world on rayon's global pool advances its bodies on the calling
+/// thread (spawning costs more than the work). Default `64`.
+pub const PARALLEL_MIN_BODIES: usize = 64;
+
+/// Most contact failures [`World::failures`] keeps (the counter counts them all). Default
+/// `1000`.
+pub const MAX_FAILURES_KEPT: usize = 1000;
+
+/// A body of a world: stays valid while other bodies are added and removed, and names nothing
+/// once its own body is removed (a new body never reuses it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BodyHandle {
+    index: u32,
+    generation: u32,
+}
+
+impl BodyHandle {
+    /// The body's slot in the world (slots of removed bodies are reused, with a new
+    /// generation).
+    #[must_use]
+    pub fn index(self) -> u32 {
+        self.index
+    }
+}
+
+impl std::fmt::Display for BodyHandle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "#{}.{}", self.index, self.generation)
+    }
+}
+
+/// Event counters of a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Counters {
+    /// Steps of the event loop (integrations of every body to the next event).
+    pub steps: u64,
+    /// Pair checks (closest-feature queries followed by a time-of-impact bound).
+    pub pair_checks: u64,
+    /// Ordinary collisions resolved.
+    pub collisions: u64,
+    /// Microcollisions (resting contact, thesis §3.5) resolved.
+    pub microcollisions: u64,
+    /// Microcollisions resolved by the reversing impulse.
+    pub reversing: u64,
+    /// Contacts the response could not resolve, handled by the fallback impulse (see the
+    /// module documentation), and stalls broken by a separating push.
+    pub unresolved: u64,
+    /// Pairs that entered the collision heap from the broad phase.
+    pub pairs_promoted: u64,
+    /// Heap operations (inserts, removals, key changes).
+    pub heap_operations: u64,
+    /// Evaluations of load functions.
+    pub load_evaluations: u64,
+    /// Checks that found the bodies touching or penetrating (distance 0).
+    pub touching_checks: u64,
+    /// Smallest distance seen at any check (length; 0 when touching or penetrating).
+    pub min_distance: f64,
+    /// Largest penetration depth the loop itself found at a check (length). A diagnostic of
+    /// the loop; the guarantee is measured from outside by [`PenetrationMonitor`].
+    pub max_penetration: f64,
+}
+
+/// One resolved contact ([`World::contacts`], [`World::set_event_log`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactEvent {
+    /// Simulated time.
+    pub time: f64,
+    /// The first body; the impulse acts on `a`, −impulse on `b`.
+    pub a: BodyHandle,
+    /// The second body.
+    pub b: BodyHandle,
+    /// What kind of contact it was.
+    pub kind: ContactKind,
+    /// The impulse on body `a` (world).
+    pub impulse: DVec3,
+    /// The contact point (world).
+    pub point: DVec3,
+    /// The contact normal (world, unit, from `b` toward `a`).
+    pub normal: DVec3,
+    /// Kinetic energy of the two bodies before the impulse.
+    pub energy_before: f64,
+    /// Kinetic energy of the two bodies after the impulse.
+    pub energy_after: f64,
+    /// Linear momentum of the two bodies before the impulse.
+    pub momentum_before: DVec3,
+    /// Linear momentum of the two bodies after the impulse.
+    pub momentum_after: DVec3,
+}
+
+/// A contact the response could not resolve, and what was done instead.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactFailure {
+    /// Simulated time.
+    pub time: f64,
+    /// The first body.
+    pub a: BodyHandle,
+    /// The second body.
+    pub b: BodyHandle,
+    /// Why the response failed, and what the fallback did.
+    pub message: String,
+}
+
+/// What one call of [`World::step`] or [`World::step_until`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepReport {
+    /// Simulated time at the start of the call.
+    pub start: f64,
+    /// Simulated time at the end.
+    pub end: f64,
+    /// The counters' increase over the call.
+    pub counters: Counters,
+    /// Contacts resolved during the call (see [`World::contacts`]).
+    pub contacts: usize,
+    /// The largest penetration the checking mode measured during the call (length; `None`
+    /// unless [`World::set_checking`] is on).
+    pub checked_penetration: Option<f64>,
+}
+
+/// The state of one body at one time, as a program sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyState {
+    /// Origin of the body's own frame (the position it was placed at, moved by the motion;
+    /// world).
+    pub position: DVec3,
+    /// Orientation of the body's own frame (world).
+    pub rotation: glam::DQuat,
+    /// Velocity of the centre of mass (world).
+    pub velocity: DVec3,
+    /// Angular velocity (world).
+    pub omega: DVec3,
+    /// Centre of mass (world).
+    pub com: DVec3,
+}
+
+/// Settings of a world built in code ([`World::new`]); a scene file's fields map to them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldSettings {
+    /// Gravitational acceleration (world).
+    pub gravity: DVec3,
+    /// Collision epsilon ε_c (length).
+    pub collision_epsilon: f64,
+    /// Contact properties of material pairs not set otherwise.
+    pub default_contact: Material,
+    /// The rotation integrator.
+    pub integrator: Integrator,
+    /// The contact model (collision tolerance, microcollision parameters).
+    pub contact_model: ContactModel,
+    /// Directory that relative paths of bodies added later (OBJ files) resolve against.
+    pub base_dir: PathBuf,
+}
+
+impl WorldSettings {
+    /// Gravity 9.81 down z, the given ε_c, μ = 0.3 and e = 0.5, default solver settings.
+    #[must_use]
+    pub fn new(collision_epsilon: f64) -> Self {
+        Self {
+            gravity: DVec3::new(0.0, 0.0, -9.81),
+            collision_epsilon,
+            default_contact: Material {
+                friction: 0.3,
+                restitution: 0.5,
+            },
+            integrator: Integrator::default(),
+            contact_model: ContactModel::default(),
+            base_dir: PathBuf::from("."),
+        }
+    }
+
+    /// The settings a scene description gives.
+    #[must_use]
+    pub fn from_desc(desc: &SceneDesc) -> Self {
+        Self {
+            gravity: DVec3::from_array(desc.gravity),
+            collision_epsilon: desc.collision_epsilon,
+            default_contact: Material {
+                friction: desc.default_contact.friction,
+                restitution: desc.default_contact.restitution,
+            },
+            integrator: Integrator {
+                rotation_tolerance: desc.accuracy.rotation_tolerance,
+            },
+            contact_model: ContactModel {
+                collision_tolerance: desc.accuracy.collision_tolerance,
+                max_restitution: desc.accuracy.max_restitution,
+                reversing: desc.accuracy.reversing,
+            },
+            base_dir: PathBuf::from("."),
+        }
+    }
+}
+
+/// Per-pair state kept between checks.
+#[derive(Clone, Debug, Default)]
+struct PairState {
+    /// Cached closest features of every piece pair (coherence), `[i * pieces_b + j]`.
+    features: Vec<FeaturePair>,
+    /// Last contact normal seen per piece pair (world, from the second body toward the first).
+    normals: Vec<Option<DVec3>>,
+}
+
+/// One slot of the body table.
+#[derive(Clone, Debug)]
+struct Slot {
+    generation: u32,
+    body: Option<Body>,
+}
+
+/// A load function and when it is evaluated next.
+#[derive(Clone)]
+struct LoadSchedule {
+    body: u32,
+    rate: f64,
+    start: f64,
+    evaluations: u64,
+    f: LoadFn,
+}
+
+impl LoadSchedule {
+    fn next_time(&self) -> f64 {
+        self.start + self.evaluations as f64 / self.rate
+    }
+}
+
+/// Faults a test can inject to show that a guarantee is measured from outside the loop.
+#[cfg(test)]
+#[derive(Clone, Debug)]
+pub(crate) struct Faults {
+    /// Every time-of-impact bound is multiplied by this (1: none; > 1: not conservative).
+    pub toi_scale: f64,
+    /// The response fails on this pair (slot indices, either order).
+    pub fail_pair: Option<(u32, u32)>,
+}
+
+#[cfg(test)]
+impl Default for Faults {
+    fn default() -> Self {
+        Self {
+            toi_scale: 1.0,
+            fail_pair: None,
+        }
+    }
+}
+
+/// A simulated world.
+#[derive(Clone)]
+pub struct World {
+    slots: Vec<Slot>,
+    free: Vec<u32>,
+    names: FxHashMap<String, u32>,
+    gravity: DVec3,
+    schedule: Schedule,
+    integrator: Integrator,
+    model: ContactModel,
+    materials: Materials,
+    base_dir: PathBuf,
+    time: f64,
+    heap: CollisionHeap,
+    /// The broad phase and the range of body sizes its levels were made for (`None` until
+    /// the first body).
+    hash: Option<(CoherentHash, (f64, f64))>,
+    pairs: FxHashMap<(u32, u32), PairState>,
+    counters: Counters,
+    stalled_checks: u64,
+    /// Stalls broken since time last advanced.
+    stalls: u64,
+    pool: Option<Arc<rayon::ThreadPool>>,
+    events: Option<Vec<ContactEvent>>,
+    recent: Vec<ContactEvent>,
+    failures: Vec<ContactFailure>,
+    loads: Vec<LoadSchedule>,
+    /// Bodies whose heap pairs need new bounds before the next step (moved, pushed or loaded
+    /// by the program).
+    stale: Vec<u32>,
+    /// The checking mode's monitor ([`World::set_checking`]).
+    checking: Option<PenetrationMonitor>,
+    #[cfg(test)]
+    pub(crate) faults: Faults,
+}
+
+impl std::fmt::Debug for World {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("World")
+            .field("time", &self.time)
+            .field("bodies", &self.len())
+            .field("collision_epsilon", &self.schedule.collision_epsilon)
+            .field("counters", &self.counters)
+            .finish_non_exhaustive()
+    }
+}
+
+impl World {
+    /// An empty world.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] for a non-finite gravity or an ε_c that is not positive and
+    /// finite, a bad default contact or solver setting.
+    pub fn new(settings: WorldSettings) -> Result<Self, SimError> {
+        let bad = |field: &str, problem: String| SimError::Invalid {
+            what: "world".into(),
+            field: field.into(),
+            problem,
+        };
+        if !settings.gravity.is_finite() {
+            return Err(bad(
+                "gravity",
+                format!("{} is not finite", settings.gravity),
+            ));
+        }
+        let eps = settings.collision_epsilon;
+        if !(eps.is_finite() && eps > 0.0) {
+            return Err(bad(
+                "collision_epsilon",
+                format!("{eps} must be finite and > 0"),
+            ));
+        }
+        settings
+            .default_contact
+            .validate()
+            .map_err(|p| bad("default_contact", p))?;
+        let tol = settings.integrator.rotation_tolerance;
+        if !(tol.is_finite() && tol > 0.0) {
+            return Err(bad(
+                "rotation_tolerance",
+                format!("{tol} must be finite and > 0"),
+            ));
+        }
+        settings
+            .contact_model
+            .validate()
+            .map_err(|p| bad("contact_model", p))?;
+        Ok(Self {
+            slots: Vec::new(),
+            free: Vec::new(),
+            names: FxHashMap::default(),
+            gravity: settings.gravity,
+            schedule: Schedule::new(eps),
+            integrator: settings.integrator,
+            model: settings.contact_model,
+            materials: Materials::new(settings.default_contact),
+            base_dir: settings.base_dir,
+            time: 0.0,
+            heap: CollisionHeap::new(),
+            hash: None,
+            pairs: FxHashMap::default(),
+            counters: Counters {
+                min_distance: f64::INFINITY,
+                ..Counters::default()
+            },
+            stalled_checks: 0,
+            stalls: 0,
+            pool: None,
+            events: None,
+            recent: Vec::new(),
+            failures: Vec::new(),
+            loads: Vec::new(),
+            stale: Vec::new(),
+            checking: None,
+            #[cfg(test)]
+            faults: Faults::default(),
+        })
+    }
+
+    /// Builds a world from a scene: validates it, builds every body, refuses bodies that
+    /// overlap by more than ε_c (touching is contact), and schedules the first checks.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`], [`SimError::Geometry`] or [`SimError::Overlap`], naming the
+    /// body and what is wrong.
+    pub fn from_scene(scene: &Scene) -> Result<Self, SimError> {
+        let desc = &scene.desc;
+        desc.validate()?;
+        let mut settings = WorldSettings::from_desc(desc);
+        settings.base_dir.clone_from(&scene.base_dir);
+        let mut world = Self::new(settings)?;
+        for c in &desc.contacts {
+            world.set_material_pair(
+                &c.a,
+                &c.b,
+                Material {
+                    friction: c.friction,
+                    restitution: c.restitution,
+                },
+            )?;
+        }
+        world.add_bodies(&desc.bodies)?;
+        Ok(world)
+    }
+
+    /// Runs the per-body work on a pool of `threads` threads (the default is rayon's global
+    /// pool). Results do not depend on the thread count.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] for zero threads, [`SimError::Runtime`] if the pool cannot be
+    /// built.
+    pub fn set_threads(&mut self, threads: usize) -> Result<(), SimError> {
+        if threads == 0 {
+            return Err(SimError::Invalid {
+                what: "world".into(),
+                field: "threads".into(),
+                problem: "need at least one thread".into(),
+            });
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| self.runtime(format!("thread pool: {e}")))?;
+        self.pool = Some(Arc::new(pool));
+        Ok(())
+    }
+
+    /// Starts (or stops) recording every resolved contact in an event log kept for the whole
+    /// run ([`World::events`]); [`World::contacts`] keeps those of the last step either way.
+    pub fn set_event_log(&mut self, on: bool) {
+        self.events = if on { Some(Vec::new()) } else { None };
+    }
+
+    /// The event log (empty unless [`World::set_event_log`] turned it on).
+    #[must_use]
+    pub fn events(&self) -> &[ContactEvent] {
+        self.events.as_deref().unwrap_or(&[])
+    }
+
+    /// The contacts resolved during the last call of [`World::step`] or
+    /// [`World::step_until`].
+    #[must_use]
+    pub fn contacts(&self) -> &[ContactEvent] {
+        &self.recent
+    }
+
+    /// Contacts the response could not resolve (at most [`MAX_FAILURES_KEPT`], the first
+    /// ones), with what was done instead.
+    #[must_use]
+    pub fn failures(&self) -> &[ContactFailure] {
+        &self.failures
+    }
+
+    /// Turns the checking mode on or off: after every step of the event loop, an independent
+    /// [`PenetrationMonitor`] measures the exact distance of every close pair (slow: for
+    /// validation). Its findings: [`World::checked_penetration`], [`StepReport`].
+    pub fn set_checking(&mut self, on: bool) {
+        self.checking = on.then(PenetrationMonitor::new);
+    }
+
+    /// What the checking mode has measured so far (`None` when it is off).
+    #[must_use]
+    pub fn checked_penetration(&self) -> Option<&crate::monitor::PenetrationReport> {
+        self.checking.as_ref().map(PenetrationMonitor::report)
+    }
+
+    /// Current simulated time.
+    #[must_use]
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Gravity (world).
+    #[must_use]
+    pub fn gravity(&self) -> DVec3 {
+        self.gravity
+    }
+
+    /// The collision epsilon ε_c.
+    #[must_use]
+    pub fn collision_epsilon(&self) -> f64 {
+        self.schedule.collision_epsilon
+    }
+
+    /// Event counters so far.
+    #[must_use]
+    pub fn counters(&self) -> Counters {
+        let mut c = self.counters;
+        let h = self.heap.stats();
+        c.heap_operations = h.inserts + h.removals + h.key_changes;
+        c
+    }
+
+    /// Number of bodies.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.names.len()
+    }
+
+    /// True for a world without bodies.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+
+    /// Every body with its handle, in slot order.
+    pub fn bodies(&self) -> impl Iterator<Item = (BodyHandle, &Body)> {
+        self.slots.iter().enumerate().filter_map(|(i, s)| {
+            s.body.as_ref().map(|b| {
+                (
+                    BodyHandle {
+                        index: i as u32,
+                        generation: s.generation,
+                    },
+                    b,
+                )
+            })
+        })
+    }
+
+    /// The handles of every body, in slot order.
+    #[must_use]
+    pub fn handles(&self) -> Vec<BodyHandle> {
+        self.bodies().map(|(h, _)| h).collect()
+    }
+
+    /// The body a handle names (`None` once it is removed).
+    #[must_use]
+    pub fn body(&self, h: BodyHandle) -> Option<&Body> {
+        self.slots
+            .get(h.index as usize)
+            .filter(|s| s.generation == h.generation)
+            .and_then(|s| s.body.as_ref())
+    }
+
+    /// The handle of the body called `name`.
+    #[must_use]
+    pub fn handle(&self, name: &str) -> Option<BodyHandle> {
+        self.names.get(name).map(|&i| self.handle_of(i))
+    }
+
+    /// The state of a body.
+    ///
+    /// # Errors
+    /// [`SimError::UnknownBody`] for a handle whose body was removed.
+    pub fn state(&self, h: BodyHandle) -> Result<BodyState, SimError> {
+        self.body(h).map(Body::state).ok_or(SimError::UnknownBody {
+            handle: h.to_string(),
+        })
+    }
+
+    /// The state of every body, in slot order (as [`World::handles`]).
+    #[must_use]
+    pub fn states(&self) -> Vec<BodyState> {
+        self.bodies().map(|(_, b)| b.state()).collect()
+    }
+
+    /// Total kinetic energy of the dynamic bodies.
+    #[must_use]
+    pub fn kinetic_energy(&self) -> f64 {
+        self.bodies().map(|(_, b)| b.kinetic_energy()).sum()
+    }
+
+    /// Total potential energy of the dynamic bodies in gravity (zero at the world origin).
+    #[must_use]
+    pub fn potential_energy(&self) -> f64 {
+        self.bodies()
+            .map(|(_, b)| b.potential_energy(self.gravity))
+            .sum()
+    }
+
+    fn handle_of(&self, i: u32) -> BodyHandle {
+        BodyHandle {
+            index: i,
+            generation: self.slots[i as usize].generation,
+        }
+    }
+
+    /// The live body in slot `i` (an internal id from the heap, hash or pair table, which hold
+    /// live bodies only).
+    fn b(&self, i: u32) -> &Body {
+        self.slots[i as usize]
+            .body
+            .as_ref()
+            .expect("internal ids name live bodies")
+    }
+
+    fn b_mut(&mut self, i: u32) -> &mut Body {
+        self.slots[i as usize]
+            .body
+            .as_mut()
+            .expect("internal ids name live bodies")
+    }
+
+    fn name(&self, i: u32) -> &str {
+        &self.b(i).name
+    }
+
+    fn runtime(&self, message: String) -> SimError {
+        SimError::Runtime {
+            time: self.time,
+            message,
+        }
+    }
+
+    /// Whether the pair can ever need a collision (at least one body is dynamic).
+    fn pair_matters(&self, a: u32, b: u32) -> bool {
+        self.b(a).is_dynamic() || self.b(b).is_dynamic()
+    }
+}

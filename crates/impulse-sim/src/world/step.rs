@@ -1,0 +1,311 @@
+//! The event loop: one step of thesis §2.4.3's `advance` at a time (module documentation of
+//! [`super`]).
+
+use impulse_broadphase::BroadphaseError;
+use impulse_collide::Motion;
+use rayon::prelude::*;
+
+use super::{
+    Counters, MAX_CHECKS_WITHOUT_PROGRESS, MAX_STALLS_PER_INSTANT, PARALLEL_MIN_BODIES, StepReport,
+    World,
+};
+use crate::body::{Body, BodyKind};
+use crate::error::SimError;
+
+impl World {
+    /// Advances the world by `dt` (s) of simulated time ([`World::step_until`]).
+    ///
+    /// # Errors
+    /// As [`World::step_until`].
+    pub fn step(&mut self, dt: f64) -> Result<StepReport, SimError> {
+        if !(dt.is_finite() && dt >= 0.0) {
+            return Err(SimError::Invalid {
+                what: "step".into(),
+                field: "dt".into(),
+                problem: format!("{dt} must be finite and ≥ 0"),
+            });
+        }
+        self.step_until(self.time + dt)
+    }
+
+    /// Advances the world to time `t` (nothing happens if `t` is not later than now) and
+    /// reports what happened; [`World::contacts`] then lists the contacts resolved.
+    ///
+    /// A contact the response cannot resolve does not stop the run (see the module
+    /// documentation of [`super`]).
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] for a `t` that is not finite; [`SimError::Runtime`] when a body's
+    /// state stops being finite (or its motion cannot be bounded), a load function returns a
+    /// non-finite load, or the broad phase cannot hold a body. The world is then exactly as it
+    /// was before the call.
+    pub fn step_until(&mut self, t: f64) -> Result<StepReport, SimError> {
+        if !t.is_finite() {
+            return Err(SimError::Invalid {
+                what: "step_until".into(),
+                field: "t".into(),
+                problem: format!("{t} is not a finite time"),
+            });
+        }
+        let start = self.time;
+        let before = self.counters();
+        let checked_before = self.checked_penetration().map(|r| r.max_depth);
+        let backup = self.clone();
+        self.recent.clear();
+        let run = |w: &mut World| -> Result<(), SimError> {
+            w.rekey_stale()?;
+            while w.time < t {
+                w.loop_step(t)?;
+            }
+            Ok(())
+        };
+        if let Err(e) = run(self) {
+            *self = backup;
+            return Err(e);
+        }
+        let after = self.counters();
+        Ok(StepReport {
+            start,
+            end: self.time,
+            counters: difference(&after, &before),
+            contacts: self.recent.len(),
+            checked_penetration: self
+                .checked_penetration()
+                .map(|r| r.max_depth)
+                .filter(|_| checked_before.is_some()),
+        })
+    }
+
+    /// Tight box of a fixed body, swept box of a moving one over `dt` from now; grown by ε_c so
+    /// pairs within ε_c are close.
+    pub(super) fn swept_box(&self, i: u32, dt: f64) -> impulse_geom::Aabb {
+        let b = self.b(i);
+        if b.kind == BodyKind::Fixed {
+            return self.static_box(i);
+        }
+        b.motion(self.gravity)
+            .swept_com_aabb(dt)
+            .expanded(b.r_max + self.collision_epsilon())
+    }
+
+    pub(super) fn static_box(&self, i: u32) -> impulse_geom::Aabb {
+        let b = self.b(i);
+        if b.kind == BodyKind::Fixed {
+            b.shape.aabb(&b.pose).expanded(self.collision_epsilon())
+        } else {
+            self.swept_box(i, 0.0)
+        }
+    }
+
+    /// The next time a load function is due (∞ without any).
+    fn next_load_time(&self) -> f64 {
+        self.loads
+            .iter()
+            .map(super::LoadSchedule::next_time)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// One step of the `advance` algorithm (module documentation of [`super`]), ending no
+    /// later than `limit`.
+    fn loop_step(&mut self, limit: f64) -> Result<(), SimError> {
+        let t0 = self.time;
+        let mut t_end = self
+            .heap
+            .peek()
+            .map_or(limit, |(_, k)| k.min(limit))
+            .min(self.next_load_time());
+        let moving: Vec<u32> = self
+            .bodies()
+            .filter(|(_, b)| b.kind != BodyKind::Fixed)
+            .map(|(h, _)| h.index())
+            .collect();
+        for &i in &moving {
+            if let Motion::Unbounded { .. } = self.b(i).motion(self.gravity) {
+                return Err(self.runtime(format!(
+                    "body {}: its motion cannot be bounded (velocity {}, angular velocity {})",
+                    self.name(i),
+                    self.b(i).velocity,
+                    self.b(i).omega
+                )));
+            }
+        }
+        // 2. Swept boxes; halve the step while a box would cover too many tiles.
+        'boxes: loop {
+            for &i in &moving {
+                let b = self.swept_box(i, t_end - t0);
+                match self.hash_mut().update(i, b) {
+                    Ok(()) => {}
+                    Err(BroadphaseError::TooManyCells { .. }) if t_end - t0 > 0.0 => {
+                        t_end = t0 + 0.5 * (t_end - t0);
+                        continue 'boxes;
+                    }
+                    Err(e) => {
+                        return Err(
+                            self.runtime(format!("broad phase, body {}: {e}", self.name(i)))
+                        );
+                    }
+                }
+            }
+            break;
+        }
+        self.promote_new_pairs()?;
+        if let Some((_, k)) = self.heap.peek() {
+            t_end = t_end.min(k);
+        }
+        t_end = t_end.max(t0);
+        // 3. Dynamic evolution.
+        let dt = t_end - t0;
+        if dt > 0.0 {
+            self.advance_bodies(dt)?;
+            self.stalled_checks = 0;
+            self.stalls = 0;
+        }
+        self.time = t_end;
+        self.counters.steps += 1;
+        // Loads due now change the bodies' motions: new bounds for their pairs.
+        if self.next_load_time() <= self.time {
+            self.evaluate_due_loads()?;
+            self.rekey_stale()?;
+        }
+        // 4. Check the top pair if it is due.
+        if let Some((pair, key)) = self.heap.peek() {
+            if key <= self.time {
+                self.stalled_checks += 1;
+                if self.stalled_checks > MAX_CHECKS_WITHOUT_PROGRESS {
+                    self.stalls += 1;
+                    if self.stalls > MAX_STALLS_PER_INSTANT {
+                        return Err(self.runtime(format!(
+                            "the run is stuck: {MAX_STALLS_PER_INSTANT} stalls of \
+                             {MAX_CHECKS_WITHOUT_PROGRESS} checks at one instant (last pair {} / {})",
+                            self.name(pair.0),
+                            self.name(pair.1)
+                        )));
+                    }
+                    self.break_stall(pair)?;
+                } else {
+                    self.check_top(pair)?;
+                }
+            }
+        }
+        if let Some(mut monitor) = self.checking.take() {
+            monitor.sample(self);
+            self.checking = Some(monitor);
+        }
+        Ok(())
+    }
+
+    fn advance_bodies(&mut self, dt: f64) -> Result<(), SimError> {
+        let (g, integ) = (self.gravity, self.integrator);
+        // With a pool set by `set_threads`, always go parallel (the determinism check needs
+        // the parallel path); on the global pool, only when there is enough work.
+        let serial = self.pool.is_none() && self.slots.len() < PARALLEL_MIN_BODIES;
+        let step = |b: &mut Body| b.advance(dt, g, &integ).err().map(|e| e.to_string());
+        let run = |slots: &mut [super::Slot]| -> Vec<Option<String>> {
+            if serial {
+                slots
+                    .iter_mut()
+                    .map(|s| s.body.as_mut().and_then(step))
+                    .collect()
+            } else {
+                slots
+                    .par_iter_mut()
+                    .map(|s| s.body.as_mut().and_then(step))
+                    .collect()
+            }
+        };
+        let errors = match &self.pool {
+            Some(pool) => pool.install(|| run(&mut self.slots)),
+            None => run(&mut self.slots),
+        };
+        if let Some((i, e)) = errors
+            .into_iter()
+            .enumerate()
+            .find_map(|(i, e)| e.map(|e| (i, e)))
+        {
+            return Err(self.runtime(format!("body {}: {e}", self.name(i as u32))));
+        }
+        Ok(())
+    }
+
+    /// Inserts every pair that became close (thesis §2.4.3, 0→1) into the heap.
+    pub(super) fn promote_new_pairs(&mut self) -> Result<(), SimError> {
+        let Some((hash, _)) = &mut self.hash else {
+            return Ok(());
+        };
+        for (a, b) in hash.take_new_close_pairs() {
+            if !self.pair_matters(a, b) || self.heap.contains((a, b)) {
+                continue;
+            }
+            let key = self.bound((a, b));
+            self.heap
+                .insert((a, b), key)
+                .map_err(|e| self.runtime(format!("collision heap: {e}")))?;
+            self.counters.pairs_promoted += 1;
+        }
+        Ok(())
+    }
+
+    /// Evaluates every load function that is due now and holds its load until the next
+    /// evaluation.
+    pub(super) fn evaluate_due_loads(&mut self) -> Result<(), SimError> {
+        for k in 0..self.loads.len() {
+            let (i, due) = (self.loads[k].body, self.loads[k].next_time());
+            if due > self.time {
+                continue;
+            }
+            let state = self.b(i).state();
+            let load = (self.loads[k].f)(self.time, &state);
+            if !(load.force.is_finite() && load.torque.is_finite()) {
+                return Err(self.runtime(format!(
+                    "the load function of body {} gave {load:?}",
+                    self.name(i)
+                )));
+            }
+            let l = &mut self.loads[k];
+            // Skip evaluations that fell between two steps (a rate above the loop's).
+            while l.next_time() <= self.time {
+                l.evaluations += 1;
+            }
+            self.counters.load_evaluations += 1;
+            let b = self.b_mut(i);
+            b.force = load.force;
+            b.torque = load.torque;
+            self.mark_stale(i);
+        }
+        Ok(())
+    }
+
+    /// New bounds for every heap pair of the bodies the program (or a load) changed.
+    fn rekey_stale(&mut self) -> Result<(), SimError> {
+        let stale = std::mem::take(&mut self.stale);
+        let mut pairs: Vec<(u32, u32)> =
+            stale.iter().flat_map(|&i| self.heap.pairs_of(i)).collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        for p in pairs {
+            let key = self.bound(p);
+            self.heap
+                .set_toi(p, key)
+                .map_err(|e| self.runtime(format!("collision heap: {e}")))?;
+        }
+        Ok(())
+    }
+}
+
+/// `a − b` for the counters that count (the extremes are taken from `a`).
+fn difference(a: &Counters, b: &Counters) -> Counters {
+    Counters {
+        steps: a.steps - b.steps,
+        pair_checks: a.pair_checks - b.pair_checks,
+        collisions: a.collisions - b.collisions,
+        microcollisions: a.microcollisions - b.microcollisions,
+        reversing: a.reversing - b.reversing,
+        unresolved: a.unresolved - b.unresolved,
+        pairs_promoted: a.pairs_promoted - b.pairs_promoted,
+        heap_operations: a.heap_operations - b.heap_operations,
+        load_evaluations: a.load_evaluations - b.load_evaluations,
+        touching_checks: a.touching_checks - b.touching_checks,
+        min_distance: a.min_distance,
+        max_penetration: a.max_penetration,
+    }
+}
