@@ -20,7 +20,7 @@ use std::time::Instant;
 use impulse_sim::{Recording, World, run};
 
 use crate::Result;
-use crate::cases::scenes::{SceneCheck, load, scene_checks};
+use crate::cases::scenes::{Run, SceneCheck, duration, load_scene, scene_checks};
 
 use crate::validate::case::Metric;
 use crate::validate::check::evaluate;
@@ -194,28 +194,28 @@ pub fn run_bench(options: &Options) -> Result<()> {
 }
 
 fn bench_one(check: &SceneCheck, setting: &Setting) -> Result<Row> {
-    let (mut scene, _) = load(check.scene)?;
+    let mut scene = load_scene(check.scene)?;
     scene.desc.collision_epsilon *= setting.epsilon_factor;
     scene.desc.accuracy.rotation_tolerance = setting.rotation_tolerance;
     scene.desc.accuracy.collision_tolerance = setting.collision_tolerance;
     let mut world = World::from_scene(&scene).map_err(|e| format!("{}: {e}", check.case))?;
     world.set_event_log(check.event_log);
     let start = Instant::now();
-    let rec: Recording = run(
-        &mut world,
-        scene.desc.duration,
-        scene.desc.output_rate,
-        |_| {},
-    )
-    .map_err(|e| format!("{} ({}): {e}", check.case, setting.name))?;
+    let simulated = duration(&scene)?;
+    let rec: Recording = run(&mut world, simulated, scene.desc.output_rate, |_| {})
+        .map_err(|e| format!("{} ({}): {e}", check.case, setting.name))?;
     let wall = start.elapsed().as_secs_f64();
-    let metrics = (check.metrics)(&world, &rec)?;
+    let metrics = (check.metrics)(&Run {
+        scene: &scene,
+        world: &world,
+        rec: &rec,
+    })?;
     Ok(Row {
         case: check.case,
         headline: check.headline,
         setting: setting.name,
         epsilon: scene.desc.collision_epsilon,
-        simulated: scene.desc.duration,
+        simulated,
         wall,
         thesis: check.thesis,
         error: error_of(&metrics, check.headline)?,

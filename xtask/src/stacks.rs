@@ -11,6 +11,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
+use impulse_sim::scene::{BodyDesc, ContactDesc, ShapeDesc};
 use impulse_sim::{Scene, SceneDesc, World, run};
 
 use crate::Result;
@@ -40,39 +41,38 @@ pub struct StackRow {
     pub penetration_over_eps: f64,
 }
 
-/// The scene of a stack of `n` blocks.
-fn stack_scene(n: usize) -> String {
+/// The scene of a stack of `n` blocks, built in code.
+pub fn stack_scene(n: usize) -> SceneDesc {
     let gap = 0.5 * STACK_EPSILON;
-    let mut bodies = String::from(
-        "Body(name: \"floor\", shape: Box(half_extents: (0.5, 0.5, 0.05)), position: (0, 0, -0.05), motion: Fixed),\n",
-    );
+    let mut scene = SceneDesc::new()
+        .with_name(format!("stack{n}"))
+        .with_duration(STACK_DURATION)
+        .with_collision_epsilon(STACK_EPSILON)
+        .with_default_contact(ContactDesc::new(0.5, 0.3))
+        .with_body(
+            BodyDesc::fixed("floor", ShapeDesc::cuboid([0.5, 0.5, 0.05])).at([0.0, 0.0, -0.05]),
+        );
     for k in 0..n {
         let z = HALF[2] + gap + k as f64 * (2.0 * HALF[2] + gap);
-        let _ = writeln!(
-            bodies,
-            "Body(name: \"block{k}\", shape: Box(half_extents: ({}, {}, {})), position: (0, 0, {z}), mass: Density(700.0)),",
-            HALF[0], HALF[1], HALF[2]
+        scene = scene.with_body(
+            BodyDesc::new(format!("block{k}"), ShapeDesc::cuboid(HALF))
+                .at([0.0, 0.0, z])
+                .with_density(700.0),
         );
     }
-    format!(
-        "Scene(name: \"stack{n}\", gravity: (0, 0, -9.81), duration: {STACK_DURATION}, collision_epsilon: {STACK_EPSILON},
-          output_rate: 100.0, default_contact: Contact(friction: 0.5, restitution: 0.3),
-          bodies: [{bodies}])"
-    )
+    scene
 }
 
 /// Runs one stack.
 pub fn run_stack(n: usize) -> Result<StackRow> {
-    let desc =
-        SceneDesc::from_ron(&stack_scene(n), "stack").map_err(|e| format!("stack {n}: {e}"))?;
-    let scene = Scene::new(desc, Path::new("."));
+    let scene = Scene::new(stack_scene(n), Path::new("."));
     let mut world = World::from_scene(&scene).map_err(|e| format!("stack {n}: {e}"))?;
     let start = Instant::now();
     let rec =
         run(&mut world, STACK_DURATION, 100.0, |_| {}).map_err(|e| format!("stack {n}: {e}"))?;
     let wall = start.elapsed().as_secs_f64();
-    let top = world
-        .body_index(&format!("block{}", n - 1))
+    let top = rec
+        .index(&format!("block{}", n - 1))
         .ok_or("no top block")?;
     let (first, last) = (
         rec.frames.first().ok_or("no frames")?,
@@ -85,7 +85,7 @@ pub fn run_stack(n: usize) -> Result<StackRow> {
         pair_checks: rec.counters.pair_checks,
         impulses: rec.counters.collisions + rec.counters.microcollisions,
         top_drift: d.x.hypot(d.y),
-        penetration_over_eps: rec.counters.max_penetration / STACK_EPSILON,
+        penetration_over_eps: rec.max_penetration() / STACK_EPSILON,
     })
 }
 

@@ -33,22 +33,22 @@ pub fn cases() -> Vec<Case> {
         Case {
             name: "V1-table-6.1",
             description: "ten volume integrals of the cube (side 20) and the tetrahedron (0, 5i, 4j, 3k) vs thesis Table 6.1",
-            run: v1_table_6_1,
+            run: Box::new(v1_table_6_1),
         },
         Case {
             name: "V2-assembled",
             description: "mass, centre of mass and centroidal inertia of the Table 6.1 bodies vs closed forms",
-            run: v2_assembled,
+            run: Box::new(v2_assembled),
         },
         Case {
             name: "V3-table-6.2",
             description: "geodesic spheres 1-6 vs thesis Table 6.2 (printed digits), odd integrals 0, inscribed < T < circumscribed",
-            run: v3_table_6_2,
+            run: Box::new(v3_table_6_2),
         },
         Case {
             name: "V4-invariance",
             description: "mass properties invariant under rigid motion (1e3 sizes away), face order, start vertex, triangulation",
-            run: v4_invariance,
+            run: Box::new(v4_invariance),
         },
     ]
 }

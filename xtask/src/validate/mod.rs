@@ -243,7 +243,7 @@ impl Row {
 /// Runs one case: its metrics' rows, then its snapshot row.
 fn run_case(case: &Case, update: bool, dir: &Path, rows: &mut Vec<Row>, tally: &mut Tally) {
     let start = Instant::now();
-    let result = std::panic::catch_unwind(case.run);
+    let result = std::panic::catch_unwind(|| (case.run)());
     let wall = format!("{:.1}", start.elapsed().as_secs_f64() * 1e3);
     let first = rows.len();
 
@@ -415,7 +415,7 @@ mod tests {
         Case {
             name,
             description: "test",
-            run: no_metrics,
+            run: Box::new(no_metrics),
         }
     }
 
@@ -455,7 +455,7 @@ mod tests {
         let failing = Case {
             name: "failing",
             description: "d",
-            run: failing,
+            run: Box::new(failing),
         };
         run_case(&failing, false, &dir, &mut rows, &mut tally);
         assert_eq!((rows.len(), tally.failed_cases), (1, 1));
@@ -466,7 +466,7 @@ mod tests {
         let bad = Case {
             name: "bad",
             description: "d",
-            run: bad_metrics,
+            run: Box::new(bad_metrics),
         };
         run_case(&bad, false, &dir, &mut rows, &mut tally);
         let pass: Vec<&str> = rows.iter().map(|r| r.cells[5].as_str()).collect();

@@ -1,0 +1,1 @@
+//! Perturbation tests (filled below).
