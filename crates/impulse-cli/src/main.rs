@@ -18,6 +18,7 @@
 mod dynamics;
 mod run;
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -43,7 +44,7 @@ enum Command {
         /// The scene file (.ron); see fixtures/scenes/ for examples.
         scene: PathBuf,
         /// Simulated end time in seconds (default: the scene's `duration`).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         until: Option<f64>,
         /// Write the trajectory (one row per frame and body) to this .csv or .json file.
         #[arg(long)]
@@ -171,8 +172,15 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(text) => {
-            println!("{text}");
-            ExitCode::SUCCESS
+            // A closed pipe (`impulse run … | head -3`) is the reader's choice, not an error.
+            let mut out = std::io::stdout().lock();
+            match writeln!(out, "{text}").and_then(|()| out.flush()) {
+                Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                    eprintln!("error: cannot write to standard output: {e}");
+                    ExitCode::FAILURE
+                }
+                _ => ExitCode::SUCCESS,
+            }
         }
         Err(message) => {
             eprintln!("error: {message}");

@@ -1,7 +1,7 @@
 //! `impulse run`: simulate a scene file, print a summary, write the trajectory and plots.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
+use std::io::{IsTerminal as _, Write as _};
 use std::path::Path;
 use std::time::Instant;
 
@@ -9,6 +9,8 @@ use impulse_sim::{Recording, Scene, World};
 
 /// Runs longer than this (wall seconds) show a progress line on stderr.
 const PROGRESS_AFTER_S: f64 = 2.0;
+/// When stderr is not a terminal, a progress line is written at most this often (wall s).
+const PROGRESS_LINE_EVERY_S: f64 = 10.0;
 /// Plot size in SVG user units (pixels).
 const PLOT_WIDTH: f64 = 640.0;
 /// Plot height in SVG user units.
@@ -33,14 +35,28 @@ pub struct RunArgs<'a> {
 /// Runs the scene; returns the summary text.
 pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
     let scene = Scene::read(args.scene).map_err(|e| e.to_string())?;
-    let until = args.until.unwrap_or(scene.desc.duration);
+    let until = match (args.until, scene.desc.duration) {
+        (Some(t), _) => t,
+        (None, Some(d)) => d,
+        (None, None) => {
+            return Err(format!(
+                "{}: the scene gives no `duration`; pass --until T (seconds)",
+                args.scene.display()
+            ));
+        }
+    };
     if !(until.is_finite() && until > 0.0) {
         return Err(format!("--until {until}: must be a finite time > 0"));
     }
+    impulse_sim::scene::check_frames(until, scene.desc.output_rate)
+        .map_err(|e| format!("--until {until}: {e} (lower the scene's output_rate)"))?;
     if let Some(out) = args.out {
         format_of(out)?;
     }
     let mut world = World::from_scene(&scene).map_err(|e| e.to_string())?;
+    for w in scene.desc.warnings() {
+        eprintln!("warning: {w}");
+    }
     if let Some(n) = args.threads {
         if n == 0 {
             return Err("--threads 0: need at least one thread".into());
@@ -48,16 +64,25 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         world.set_threads(n).map_err(|e| e.to_string())?;
     }
     let start = Instant::now();
-    let mut shown = false;
+    let terminal = std::io::stderr().is_terminal();
+    let (mut shown, mut last_line) = (false, 0.0);
     let rec = impulse_sim::run(&mut world, until, scene.desc.output_rate, |t| {
         let wall = start.elapsed().as_secs_f64();
-        if wall > PROGRESS_AFTER_S {
+        if wall <= PROGRESS_AFTER_S {
+            return;
+        }
+        let line = format!(
+            "  t = {t:.3} / {until} s  ({:.0} %, {wall:.1} s wall)",
+            100.0 * t / until
+        );
+        if terminal {
             shown = true;
-            eprint!(
-                "\r  t = {t:.3} / {until} s  ({:.0} %, {wall:.1} s wall)   ",
-                100.0 * t / until
-            );
+            eprint!("\r{line}   ");
             let _ = std::io::stderr().flush();
+        } else if wall - last_line >= PROGRESS_LINE_EVERY_S || t >= until {
+            // Not a terminal (a log file, a pipe): whole lines, now and then.
+            last_line = wall;
+            eprintln!("{line}");
         }
     })
     .map_err(|e| e.to_string())?;
@@ -140,19 +165,28 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
         first.kinetic_energy + first.potential_energy,
         last.kinetic_energy + last.potential_energy
     );
-    if c.touching_checks == 0 && c.min_distance > 0.0 {
-        let _ = write!(
+    if c.unresolved > 0 {
+        let _ = writeln!(
             s,
-            "penetration:      none (closest approach {:.3e}, ε_c = {:.3e})",
-            c.min_distance, scene.desc.collision_epsilon
+            "unresolved:       {} contacts the response could not resolve (fallback impulse used)",
+            c.unresolved
         );
-    } else {
-        let _ = write!(
-            s,
-            "penetration:      {} checks found bodies touching (depth below {:.3e})",
-            c.touching_checks,
-            impulse_sim::world::GAP_FLOOR_FRACTION * scene.desc.collision_epsilon
-        );
+    }
+    let p = &rec.penetration;
+    let eps = scene.desc.collision_epsilon;
+    let depth = rec.max_penetration();
+    let _ = write!(
+        s,
+        "penetration:      largest {depth:.3e} ({:.3} ε_c, ε_c = {eps:.3e}), measured independently \
+         at {} frames ({} pair measurements)",
+        depth / eps,
+        p.samples,
+        p.pairs_measured
+    );
+    if let Some((t, a, b)) = &p.worst {
+        let _ = write!(s, "; worst: {a} / {b} at t = {t:.4} s");
+    } else if p.min_distance.is_finite() {
+        let _ = write!(s, "; closest approach {:.3e}", p.min_distance);
     }
     s
 }
@@ -297,7 +331,7 @@ fn energy_plot(rec: &Recording, scene: &Scene) -> String {
 /// which they move most.
 fn paths_plot(rec: &Recording, world: &World) -> String {
     let dynamic: Vec<usize> = (0..rec.names.len())
-        .filter(|&i| world.bodies()[i].is_dynamic())
+        .filter(|&i| world.body(rec.handles[i]).is_some_and(|b| b.is_dynamic()))
         .collect();
     let mut spread = [0.0f64; 3];
     for &i in &dynamic {

@@ -45,11 +45,17 @@ fn run_two_balls_writes_summary_csv_and_plots() {
     ]);
     assert!(ok, "{stderr}");
     assert!(stdout.contains("collisions:       1\n"), "{stdout}");
-    assert!(stdout.contains("penetration:      none"), "{stdout}");
+    assert!(
+        stdout.contains("penetration:      largest 0.000e0 (0.000 ε_c"),
+        "{stdout}"
+    );
     assert!(stdout.contains("slowdown:"), "{stdout}");
     let text = std::fs::read_to_string(&csv).unwrap();
     let header = text.lines().next().unwrap();
-    assert_eq!(header, "time,body,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz");
+    assert_eq!(
+        header,
+        "time,body,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz,cx,cy,cz"
+    );
     let last_target = text
         .lines()
         .rev()
@@ -126,4 +132,155 @@ fn bad_input_is_an_error_with_a_message() {
     assert!(stderr.contains(".csv or .json"), "{stderr}");
     let (ok, _, stderr) = impulse(&["run", scene.to_str().unwrap(), "--until", "-1"]);
     assert!(!ok, "{stderr}");
+    assert!(
+        stderr.contains("--until -1: must be a finite time > 0"),
+        "{stderr}"
+    );
+}
+
+/// Writes a scene file and returns its path.
+fn scene_file(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// What a newcomer does first: a box and a ball placed exactly on the floor, no duration in
+/// the file, a quaternion written plainly. The run needs `--until` (and says so without it);
+/// the trajectory reports the box's own frame — the position and rotation written in the file
+/// — not its principal frame, with the centre of mass in extra columns; the summary measures
+/// the penetration and finds none beyond ε_c.
+#[test]
+fn a_newcomers_first_scene() {
+    let dir = temp_dir("newcomer");
+    let scene = scene_file(
+        &dir,
+        "first.ron",
+        "Scene(collision_epsilon: 1e-4, bodies: [
+            Body(name: \"floor\", shape: Box(half_extents: (1, 1, 0.1)), position: (0, 0, -0.1), motion: Fixed),
+            Body(name: \"box\", shape: Box(half_extents: (0.3, 0.1, 0.2)), position: (0, 0, 0.2),
+                 rotation: Quaternion(0.0, 0.0, 0.0, 1.0)),
+            Body(name: \"ball\", shape: Sphere(radius: 0.05), position: (0.5, 0, 0.05)),
+        ])",
+    );
+    let (ok, _, stderr) = impulse(&["run", scene.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("no `duration`") && stderr.contains("--until"),
+        "{stderr}"
+    );
+    let csv = dir.join("first.csv");
+    let (ok, stdout, stderr) = impulse(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--until",
+        "1",
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let first_box: Vec<f64> = text
+        .lines()
+        .find(|l| l.split(',').nth(1) == Some("box"))
+        .unwrap()
+        .split(',')
+        .enumerate()
+        .filter(|(k, _)| *k != 1)
+        .map(|(_, c)| c.parse().unwrap())
+        .collect();
+    // time, x, y, z, qx, qy, qz, qw, vx, vy, vz, wx, wy, wz, cx, cy, cz
+    assert_eq!(&first_box[1..8], &[0.0, 0.0, 0.2, 0.0, 0.0, 0.0, 1.0]);
+    assert_eq!(&first_box[14..17], &[0.0, 0.0, 0.2]);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("penetration:"))
+        .unwrap();
+    let depth: f64 = line.split_whitespace().nth(2).unwrap().parse().unwrap();
+    assert!(depth <= 1e-4, "{line}");
+}
+
+/// Scene mistakes get a sentence that says what to write: the old double-parenthesised
+/// quaternion, an ε_c larger than the bodies.
+#[test]
+fn scene_mistakes_are_explained() {
+    let dir = temp_dir("mistakes");
+    let quat = scene_file(
+        &dir,
+        "quat.ron",
+        "Scene(duration: 1.0, bodies: [
+            Body(name: \"b\", shape: Sphere(radius: 0.1), rotation: Quaternion((0.0, 0.0, 0.0, 1.0)))])",
+    );
+    let (ok, _, stderr) = impulse(&["run", quat.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(stderr.contains("Quaternion(x, y, z, w)"), "{stderr}");
+    let coarse = scene_file(
+        &dir,
+        "coarse.ron",
+        "Scene(duration: 1.0, collision_epsilon: 0.5, bodies: [
+            Body(name: \"ball\", shape: Sphere(radius: 0.05))])",
+    );
+    let (ok, _, stderr) = impulse(&["run", coarse.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("collision_epsilon") && stderr.contains("\"ball\""),
+        "{stderr}"
+    );
+}
+
+/// `impulse run … | head -1`: the reader goes away before the summary is written; that is no
+/// error and no panic.
+#[test]
+fn a_closed_pipe_is_not_a_panic() {
+    let scene = scenes().join("two-ball-collision.ron");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_impulse"))
+        .args(["run", scene.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+/// Body names with quotes and control characters stay valid JSON (and are quoted in CSV).
+#[test]
+fn odd_names_stay_valid_json_and_csv() {
+    let dir = temp_dir("names");
+    let scene = scene_file(
+        &dir,
+        "names.ron",
+        "Scene(duration: 0.05, gravity: (0, 0, 0), bodies: [
+            Body(name: \"a \\\"quoted\\\", name\\u{1}\", shape: Sphere(radius: 0.1))])",
+    );
+    let json = dir.join("names.json");
+    let (ok, _, stderr) = impulse(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["bodies"][0], "a \"quoted\", name\u{1}");
+    let csv = dir.join("names.csv");
+    let (ok, _, _) = impulse(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(
+        text.lines()
+            .nth(1)
+            .unwrap()
+            .contains(",\"a \"\"quoted\"\", name\u{1}\","),
+        "{text}"
+    );
 }
