@@ -1,1 +1,190 @@
-//! Perturbation tests (filled below).
+//! Each scene check fails when its scene is perturbed in the way it guards against: a check
+//! that cannot fail proves nothing. Every test runs the bundled scene with one change the
+//! check's reference does not model, and asserts the named metric fails (`validate` shows the
+//! unperturbed scene passing).
+
+use glam::DVec3;
+use impulse_sim::scene::{MotionDesc, SceneDesc};
+
+use super::{Run, run_scene, scene_checks};
+use crate::validate::case::Metric;
+use crate::validate::check::evaluate;
+
+/// Runs check `case` on its scene after `perturb`; returns its metrics.
+fn perturbed(case: &str, perturb: impl Fn(&mut SceneDesc)) -> Result<Vec<Metric>, String> {
+    let check = scene_checks()
+        .into_iter()
+        .find(|c| c.case == case)
+        .expect("a registered case");
+    let mut scene = super::load_scene(check.scene)?;
+    perturb(&mut scene.desc);
+    let (world, rec) = run_scene(&scene, check.event_log, false)?;
+    (check.metrics)(&Run {
+        scene: &scene,
+        world: &world,
+        rec: &rec,
+    })
+}
+
+/// The named metric of a perturbed run fails.
+fn fails(case: &str, metric: &str, perturb: impl Fn(&mut SceneDesc)) {
+    match perturbed(case, perturb) {
+        // A run so far off that the metric cannot be computed also counts as caught.
+        Err(e) => eprintln!("{case}: perturbed run refused by the check: {e}"),
+        Ok(metrics) => {
+            let m = metrics
+                .iter()
+                .find(|m| m.name == metric)
+                .unwrap_or_else(|| panic!("{case}: no metric {metric}"));
+            eprintln!(
+                "{case}: perturbed {metric} = {:.4e} (reference {:.4e})",
+                m.value, m.reference
+            );
+            assert!(
+                !evaluate(m).pass,
+                "{case}: {metric} = {} still passes",
+                m.value
+            );
+        }
+    }
+}
+
+fn body<'a>(d: &'a mut SceneDesc, name: &str) -> &'a mut impulse_sim::scene::BodyDesc {
+    d.bodies
+        .iter_mut()
+        .find(|b| b.name == name)
+        .expect("a body of the scene")
+}
+
+/// V6 guards the deceleration of a block sliding straight down: spun about the ramp normal,
+/// friction is shared with the spin and the block stops later.
+#[test]
+fn v6_fails_for_a_spinning_block() {
+    fails("V6-block-on-ramp", "stop_time", |d| {
+        let n = DVec3::new(-0.5, 0.0, 3f64.sqrt() / 2.0); // the 30° ramp's normal
+        body(d, "block").angular_velocity = (n * 30.0).to_array();
+    });
+}
+
+/// V7 guards the closed forms of a ball launched without spin: with backspin it rolls later
+/// and slower.
+#[test]
+fn v7_fails_for_a_ball_with_backspin() {
+    fails("V7-sliding-to-rolling", "v_star", |d| {
+        body(d, "ball").angular_velocity = [0.0, -20.0, 0.0];
+    });
+}
+
+/// V8 guards rolling on the platter: without friction the ball never rolls.
+#[test]
+fn v8_fails_without_friction() {
+    fails("V8-ball-on-platter", "slip_at_end_rel", |d| {
+        d.default_contact.friction = 0.0;
+    });
+}
+
+/// V9 guards a central collision: struck off-centre, the balls leave at other speeds.
+#[test]
+fn v9_fails_off_centre() {
+    fails("V9-two-ball", "target_v", |d| {
+        body(d, "target").position[1] = 0.1;
+    });
+}
+
+/// V10 guards the transfer through equal balls: a heavy middle ball stops it.
+#[test]
+fn v10_fails_with_a_heavy_ball_in_the_chain() {
+    fails("V10-chain-of-balls", "far_ball_speed_over_v0", |d| {
+        body(d, "ball2").mass = Some(impulse_sim::scene::MassDesc::Density(5000.0));
+    });
+}
+
+/// V11 guards the closed ring of six around one: with a ball missing it cannot close.
+#[test]
+fn v11_fails_with_a_ball_missing() {
+    fails("V11-balls-in-dish", "ball_ball_contacts", |d| {
+        d.bodies.retain(|b| b.name != "ball7");
+    });
+}
+
+/// V12 guards the chirality, not the names: with the beads mirrored the prediction flips and
+/// the case still holds (the run agrees with the new prediction); without friction nothing
+/// reverses, and it fails.
+#[test]
+fn v12_follows_the_mirrored_bead_and_fails_without_friction() {
+    let metrics = perturbed("V12-rattleback", |d| {
+        for b in &mut d.bodies {
+            for p in &mut b.point_masses {
+                p.position[1] = -p.position[1];
+            }
+        }
+    })
+    .unwrap();
+    let value = |name: &str| metrics.iter().find(|m| m.name == name).map(|m| m.value);
+    assert!(metrics.iter().all(|m| evaluate(m).pass), "{metrics:?}");
+    // Now the body spun at +4 rad/s reverses and the one at −4 keeps its spin.
+    assert!(
+        value("preferred_final_spin_ratio").unwrap() < 0.0,
+        "{metrics:?}"
+    );
+    assert!(
+        value("rattleback_final_spin_ratio").unwrap() > 0.0,
+        "{metrics:?}"
+    );
+    fails("V12-rattleback", "revolutions_before_reversal", |d| {
+        d.default_contact.friction = 0.0;
+        d.duration = Some(6.0);
+    });
+}
+
+/// V13 guards the stacking: the lower block pushed away, the upper one misses it.
+#[test]
+fn v13_fails_when_the_lower_block_slides_away() {
+    fails("V13-block-drop", "upper_on_lower", |d| {
+        body(d, "lower").velocity = [1.0, 0.0, 0.0];
+    });
+}
+
+/// V14 guards momentum across the break: a ball in the middle of the rack nailed to the table
+/// takes part of it.
+#[test]
+fn v14_fails_with_a_fixed_ball_in_the_rack() {
+    fails(
+        "V14-pool-break",
+        "momentum_change_over_friction_bound",
+        |d| {
+            body(d, "ball05").motion = MotionDesc::Fixed;
+            body(d, "ball05").mass = None;
+            d.duration = Some(0.3);
+        },
+    );
+}
+
+/// V16 guards the chain reaction: dominos twice as far apart do not reach each other.
+#[test]
+fn v16_fails_with_dominos_too_far_apart() {
+    fails("V16-dominos", "topple_in_order", |d| {
+        for b in &mut d.bodies {
+            if b.name.starts_with("domino") {
+                b.position[0] *= 3.0;
+            }
+        }
+    });
+}
+
+/// V17 guards rest: stopped at 0.4 s the coins are still moving.
+#[test]
+fn v17_fails_before_the_coins_settle() {
+    fails("V17-coins", "max_mean_speed_rel", |d| {
+        d.duration = Some(0.4);
+    });
+}
+
+/// The chute guards singulation onto the floor: with sticky caps none leaves the chute.
+#[test]
+fn chute_fails_with_sticky_caps() {
+    fails("feeder-chute", "caps_on_floor", |d| {
+        d.default_contact.friction = 2.0;
+        d.duration = Some(1.5);
+    });
+}
