@@ -75,7 +75,8 @@ pub enum ContactKind {
     /// A microcollision resolved by the reversing impulse.
     Reversing,
     /// A contact the response could not resolve, resolved by the fallback: a frictionless
-    /// Newton impulse along the normal ([`resolve_fallback`]).
+    /// Newton impulse along the normal, with e = 1 for a microcollision (see the module
+    /// documentation of [`crate::world`]).
     Fallback,
 }
 
