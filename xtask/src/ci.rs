@@ -2,8 +2,10 @@
 //!
 //! The steps are: `cargo fmt --all -- --check`; `cargo clippy --workspace --all-targets -- -D
 //! warnings`; `cargo test --workspace` (explicitly the whole workspace: the default members
-//! leave out xtask, whose own tests must run too); the layering check and `validate`, both
-//! in-process. Each step prints a heading, then its wall time; a summary line ends the run.
+//! leave out xtask, whose own tests must run too); `cargo doc --workspace --no-deps` with
+//! `RUSTDOCFLAGS=-D warnings` (broken intra-doc links fail); the layering check and
+//! `validate`, both in-process. Each step prints a heading, then its wall time; a summary line
+//! ends the run.
 
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -14,6 +16,11 @@ use crate::{Result, cargo, layering, validate, workspace_root};
 enum Step {
     /// `cargo <args>`, run in the workspace root with inherited output.
     Cargo(&'static [&'static str]),
+    /// The same with environment variables set: (args, [(name, value)]).
+    CargoEnv(
+        &'static [&'static str],
+        &'static [(&'static str, &'static str)],
+    ),
     /// A check of this crate, run in this process: (name, check).
     InProcess(&'static str, fn() -> Result<()>),
 }
@@ -23,6 +30,10 @@ impl Step {
     fn title(&self) -> String {
         match self {
             Step::Cargo(args) => format!("cargo {}", args.join(" ")),
+            Step::CargoEnv(args, env) => {
+                let vars: Vec<String> = env.iter().map(|(k, v)| format!("{k}='{v}'")).collect();
+                format!("{} cargo {}", vars.join(" "), args.join(" "))
+            }
             Step::InProcess(name, _) => (*name).to_owned(),
         }
     }
@@ -30,7 +41,8 @@ impl Step {
     /// Runs the step.
     fn run(&self) -> Result<()> {
         match self {
-            Step::Cargo(args) => cargo_step(args),
+            Step::Cargo(args) => cargo_step(args, &[]),
+            Step::CargoEnv(args, env) => cargo_step(args, env),
             Step::InProcess(_, run) => run(),
         }
     }
@@ -48,6 +60,10 @@ const STEPS: &[Step] = &[
         "warnings",
     ]),
     Step::Cargo(&["test", "--workspace"]),
+    Step::CargoEnv(
+        &["doc", "--workspace", "--no-deps"],
+        &[("RUSTDOCFLAGS", "-D warnings")],
+    ),
     Step::InProcess("layering", layering::run),
     Step::InProcess("validate", || validate::run(&validate::Options::default())),
 ];
@@ -89,10 +105,11 @@ pub fn run() -> Result<()> {
 }
 
 /// Runs `cargo <args>` in the workspace root with inherited output.
-fn cargo_step(args: &[&str]) -> Result<()> {
+fn cargo_step(args: &[&str], env: &[(&str, &str)]) -> Result<()> {
     let shown = format!("cargo {}", args.join(" "));
     let status = Command::new(cargo())
         .args(args)
+        .envs(env.iter().copied())
         .current_dir(workspace_root())
         .status()
         .map_err(|e| format!("could not start `{shown}`: {e}"))?;
@@ -121,6 +138,7 @@ mod tests {
                 "cargo fmt --all -- --check",
                 "cargo clippy --workspace --all-targets -- -D warnings",
                 "cargo test --workspace",
+                "RUSTDOCFLAGS='-D warnings' cargo doc --workspace --no-deps",
                 "layering",
                 "validate",
             ]

@@ -8,10 +8,15 @@
 //!   non-convex bodies as sets of convex pieces (eq. 2.1) with a bounding hierarchy
 //!   ([`shape`]);
 //! - brute-force references for all of these ([`brute`]);
+//! - what a distance-zero query cannot say: the penetration depth and contact normal of
+//!   pieces that touch or overlap ([`depth`]), and the near vertices of a face-on contact
+//!   ([`patch`]);
 //! - time-of-impact lower bounds: the two routines every motion type supplies (swept box of the
 //!   centre of mass, TOI coefficients; eqs. 2.2–2.5, 2.13–2.15, and for ballistic bodies a
 //!   tighter spin bound from the current ω and ‖ω̇‖ ≤ ‖L‖·ω_max/I_min) for fixed, ballistic,
-//!   cycler, spinner and oscillator bodies ([`motion`]), and the pair bound ([`toi`]);
+//!   cycler, spinner and oscillator bodies ([`motion`]), the pair bound ([`toi`]) and its
+//!   quadratic root ([`root`]), and the event loop's scheduling policy built on it — targets
+//!   inside the ε_c envelope, the gap floor, separating pairs, pruning ([`schedule`]);
 //! - the collision heap: pairs keyed by their TOI bound, with re-keying and the hysteresis rule
 //!   of §2.4.3 ([`heap`]).
 //!

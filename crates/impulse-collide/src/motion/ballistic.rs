@@ -16,7 +16,8 @@ use super::{
 /// (eq. 2.4) and β = ‖τ‖/I_min ([`Ballistic::with_omega_growth`]).
 ///
 /// State at the current time t0, world frame: `com` (m), `velocity` (m/s), `gravity` (m/s²),
-/// `omega_max` (rad/s, from [`omega_max_energy`] or [`omega_max_energy_world`], recomputed by
+/// `omega_max` (rad/s, from [`omega_max_energy`](super::omega_max_energy) or
+/// [`omega_max_energy_world`](super::omega_max_energy_world), recomputed by
 /// the caller after every impulse on the body). COM path: `p(τ) = com + v·τ + ½·g·τ²`.
 ///
 /// Optionally ([`Ballistic::with_spin`]) the current angular velocity ω₀ (world) and a bound
@@ -81,7 +82,8 @@ impl Ballistic {
 
     /// Adds the spin refinement: the angular velocity `omega` (world, rad/s) now, and
     /// `alpha_max` (rad/s²) bounding ‖ω̇‖ over the flight. For a torque-free body, L = I_w·ω is
-    /// constant, so I_w·ω̇ = L × ω and ‖ω̇‖ ≤ ‖L‖·ω_max / I_min ([`alpha_max_torque_free`]).
+    /// constant, so I_w·ω̇ = L × ω and ‖ω̇‖ ≤ ‖L‖·ω_max / I_min
+    /// ([`alpha_max_torque_free`](super::alpha_max_torque_free)).
     ///
     /// # Errors
     /// [`MotionError::NonFinite`] for a NaN or infinite `omega`; [`MotionError::InvalidParameter`]
@@ -173,7 +175,8 @@ impl Ballistic {
     /// Box enclosing the COM parabola between t0 and `t0 + dt` (either order of the two
     /// times): both endpoints, plus on each axis k with `g_k ≠ 0` the apex
     /// `p_k − v_k²/(2g_k)` when its time `−v_k/g_k` lies strictly between 0 and `dt`. Padded by
-    /// [`SWEPT_BOX_ROUNDING_REL`]. A NaN or infinite `dt` gives the box of all space.
+    /// [`SWEPT_BOX_ROUNDING_REL`](super::SWEPT_BOX_ROUNDING_REL). A NaN or infinite `dt` gives
+    /// the box of all space.
     #[must_use]
     pub fn swept_com_aabb(&self, dt: f64) -> Aabb {
         if !dt.is_finite() {
