@@ -85,6 +85,16 @@ pub fn separating_axis(a: &Convex, pose_a: &Pose, b: &Convex, pose_b: &Pose) -> 
     }
 }
 
+/// How far convex pieces `a` and `b` overlap along the unit normal `n` (from `b` toward `a`):
+/// `h_b(n) + h_a(−n)`, the highest point of `b` along `n` less the lowest point of `a` (negative:
+/// a gap along `n`). Translating `a` by that much along `n` separates them along `n`; along the
+/// separating axis it is the penetration depth. O(vertices) for polyhedra.
+#[must_use]
+pub fn overlap_along(a: &Convex, pose_a: &Pose, b: &Convex, pose_b: &Pose, n: DVec3) -> f64 {
+    let (sa, sb) = (a.placed(pose_a), b.placed(pose_b));
+    sb.support_point(n).dot(n) - sa.support_point(-n).dot(n)
+}
+
 /// The deepest penetration over the piece pairs of two shapes, with the two piece indices, or
 /// `None` when no piece pair touches or overlaps. Piece pairs whose bounding spheres are apart
 /// are skipped.
@@ -331,6 +341,21 @@ mod tests {
         let p = convex_penetration(&e, &Pose::IDENTITY, &s, &ps).unwrap();
         assert!((p.depth - 0.01).abs() < 1e-15, "{p:?}");
         assert!((p.normal + DVec3::X).length() < 1e-15);
+    }
+
+    /// Overlap along a given normal: exact along the separating axis, and an upper bound of
+    /// the depth along any other.
+    #[test]
+    fn overlap_along_a_normal() {
+        let floor = cuboid(DVec3::new(1.0, 1.0, 0.1));
+        let pf = Pose::from_translation(DVec3::new(0.0, 0.0, -0.1));
+        let b = cuboid(DVec3::new(0.1, 0.2, 0.05));
+        let pb = Pose::from_translation(DVec3::new(0.0, 0.0, 0.05 - 1e-3));
+        assert!((overlap_along(&b, &pb, &floor, &pf, DVec3::Z) - 1e-3).abs() < EXACT_TOL);
+        let tilted = DVec3::new(0.1, 0.0, 1.0).normalize();
+        assert!(overlap_along(&b, &pb, &floor, &pf, tilted) > 1e-3);
+        let lifted = Pose::from_translation(DVec3::new(0.0, 0.0, 0.06));
+        assert!((overlap_along(&b, &lifted, &floor, &pf, DVec3::Z) + 0.01).abs() < EXACT_TOL);
     }
 
     /// Compound shapes: the deepest piece pair wins and is named.

@@ -18,38 +18,54 @@ use crate::feature::Feature;
 use crate::point;
 
 /// Every vertex (world) of either polyhedron whose signed distance to the other is at most
-/// `tolerance` (inside counts: the distance is negative). A vertex outside the other's box
-/// grown by `tolerance` is skipped without a query.
+/// `tolerance` (inside counts: the distance is negative). `n` is the contact normal (unit,
+/// from `b` toward `a`): a vertex of `a` farther along `n` than `b`'s highest point plus the
+/// tolerance cannot be near `b` (nor one of `b` below `a`'s lowest), and a vertex outside the
+/// other's box grown by `tolerance` neither; only the rest are queried.
 #[must_use]
 pub fn near_vertices(
     a: &ConvexPolyhedron,
     pose_a: &Pose,
     b: &ConvexPolyhedron,
     pose_b: &Pose,
+    n: DVec3,
     tolerance: f64,
 ) -> Vec<DVec3> {
+    let world = |p: &ConvexPolyhedron, pose: &Pose| -> Vec<DVec3> {
+        p.vertices()
+            .iter()
+            .map(|&v| pose.transform_point(v))
+            .collect()
+    };
+    let (va, vb) = (world(a, pose_a), world(b, pose_b));
     let mut out = Vec::new();
-    let mut gather = |p: &ConvexPolyhedron, pose_p: &Pose, q: &ConvexPolyhedron, pose_q: &Pose| {
-        let (lo, hi) =
-            q.vertices()
+    // Vertices `from` of one body near the other (`q` at `pose_q`, vertices `to`); `sign`
+    // orients n from the other body toward this one.
+    let mut gather =
+        |from: &[DVec3], q: &ConvexPolyhedron, pose_q: &Pose, to: &[DVec3], sign: f64| {
+            let m = n * sign;
+            let top = to
                 .iter()
-                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
-                    let w = pose_q.transform_point(v);
+                .map(|w| w.dot(m))
+                .fold(f64::NEG_INFINITY, f64::max)
+                + tolerance;
+            let (lo, hi) = to
+                .iter()
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &w| {
                     (lo.min(w), hi.max(w))
                 });
-        let (lo, hi) = (lo - DVec3::splat(tolerance), hi + DVec3::splat(tolerance));
-        for &v in p.vertices() {
-            let x = pose_p.transform_point(v);
-            if x.cmplt(lo).any() || x.cmpgt(hi).any() {
-                continue;
+            let (lo, hi) = (lo - DVec3::splat(tolerance), hi + DVec3::splat(tolerance));
+            for &x in from {
+                if x.dot(m) > top || x.cmplt(lo).any() || x.cmpgt(hi).any() {
+                    continue;
+                }
+                if point::closest_point(q, pose_q, x, Feature::Vertex(0)).distance <= tolerance {
+                    out.push(x);
+                }
             }
-            if point::closest_point(q, pose_q, x, Feature::Vertex(0)).distance <= tolerance {
-                out.push(x);
-            }
-        }
-    };
-    gather(a, pose_a, b, pose_b);
-    gather(b, pose_b, a, pose_a);
+        };
+    gather(&va, b, pose_b, &vb, 1.0);
+    gather(&vb, a, pose_a, &va, -1.0);
     out
 }
 
@@ -82,7 +98,7 @@ mod tests {
         for (gap, yaw) in [(0.0, 0.0), (0.3 * TOL, 0.7), (-0.5 * TOL, 2.0)] {
             let c = DVec3::new(0.3, -0.2, 0.02 + gap);
             let pb = Pose::new(DQuat::from_rotation_z(yaw), c);
-            let near = near_vertices(&bx, &pb, &f, &pf, TOL);
+            let near = near_vertices(&bx, &pb, &f, &pf, DVec3::Z, TOL);
             assert_eq!(near.len(), 4, "gap {gap}");
             let x = centroid(&near);
             let want = DVec3::new(c.x, c.y, gap);
@@ -92,7 +108,7 @@ mod tests {
             );
         }
         let far = Pose::from_translation(DVec3::new(0.0, 0.0, 0.02 + 2.0 * TOL));
-        assert!(near_vertices(&bx, &far, &f, &pf, TOL).is_empty());
+        assert!(near_vertices(&bx, &far, &f, &pf, DVec3::Z, TOL).is_empty());
     }
 
     /// Two equal blocks stacked 1 mm out of line: two corners of each lie over the other (the
@@ -103,7 +119,7 @@ mod tests {
         let bx = primitives::cuboid(DVec3::new(0.05, 0.04, 0.025)).unwrap();
         let lower = Pose::from_translation(DVec3::new(0.0, 0.0, 0.025));
         let upper = Pose::from_translation(DVec3::new(0.001, 0.0, 0.075));
-        let near = near_vertices(&bx, &upper, &bx, &lower, TOL);
+        let near = near_vertices(&bx, &upper, &bx, &lower, DVec3::Z, TOL);
         assert_eq!(near.len(), 4);
         assert!((centroid(&near) - DVec3::new(0.0005, 0.0, 0.05)).length() < 1e-12);
     }
@@ -123,7 +139,7 @@ mod tests {
             .unwrap();
         for sink in [0.0, 0.7 * TOL] {
             let pb = Pose::new(q, DVec3::new(0.0, 0.0, -lowest.z - sink));
-            let near = near_vertices(&bx, &pb, &f, &pf, TOL);
+            let near = near_vertices(&bx, &pb, &f, &pf, DVec3::Z, TOL);
             assert_eq!(near.len(), 1);
             assert!((near[0] - (lowest + pb.translation)).length() < 1e-15);
         }
@@ -132,7 +148,7 @@ mod tests {
             q,
             DVec3::new(0.2, 0.0, 0.05 * (0.3f64.cos() + 0.3f64.sin())),
         );
-        let near = near_vertices(&bx, &pb, &f, &pf, TOL);
+        let near = near_vertices(&bx, &pb, &f, &pf, DVec3::Z, TOL);
         assert_eq!(near.len(), 2);
         let x = centroid(&near);
         let y = pb.translation.y + (q * DVec3::new(0.0, -0.05, -0.05)).y;

@@ -127,6 +127,58 @@ fn named_errors_for_bad_values() {
     );
 }
 
+/// Sizes a typo could blow up are bounded, and the error names the field; so are the solver
+/// settings a scene may now set, and an ε_c too large for the thinnest body.
+#[test]
+fn caps_and_settings_name_their_field() {
+    expect_invalid(
+        &VALID.replace(
+            "shape: Sphere(radius: 0.05)",
+            "shape: Prism(sides: 100000, radius: 0.05, half_height: 0.01)",
+        ),
+        "body \"ball\"",
+        "shape.sides",
+    );
+    expect_invalid(
+        &VALID.replace(
+            "shape: Sphere(radius: 0.05)",
+            "shape: GeodesicSphere(radius: 0.05, level: 12)",
+        ),
+        "body \"ball\"",
+        "shape.level",
+    );
+    expect_invalid(
+        &VALID
+            .replace("output_rate: 100.0,", "output_rate: 100.0, duration: 1e6,")
+            .replace("    duration: 0.05,\n", ""),
+        "scene",
+        "output_rate",
+    );
+    expect_invalid(
+        &VALID.replace(
+            "default_contact:",
+            "accuracy: Accuracy(max_restitution: 0.5), default_contact:",
+        ),
+        "scene",
+        "accuracy.max_restitution",
+    );
+    expect_invalid(
+        &VALID.replace("collision_epsilon: 1e-4", "collision_epsilon: 0.01"),
+        "scene",
+        "collision_epsilon",
+    );
+    // The settings reach the world: without the reversing impulse no microcollision uses it.
+    let text = VALID.replace(
+        "default_contact:",
+        "accuracy: Accuracy(reversing: false, max_restitution: 2.0), default_contact:",
+    );
+    let desc = SceneDesc::from_ron(&text, "hostile").unwrap();
+    let mut world = World::from_scene(&Scene::new(desc, ".")).unwrap();
+    world.step_until(0.5).unwrap();
+    let c = world.counters();
+    assert!(c.microcollisions > 0 && c.reversing == 0, "{c:?}");
+}
+
 #[test]
 fn empty_scene_and_missing_fields_are_errors() {
     let empty = "Scene(duration: 1.0, collision_epsilon: 1e-3, bodies: [])";

@@ -389,13 +389,7 @@ impl World {
         omega: DVec3,
     ) -> Result<(), SimError> {
         let i = self.dynamic_index(h, "velocity")?;
-        if !(velocity.is_finite() && omega.is_finite()) {
-            return Err(SimError::Invalid {
-                what: format!("body \"{}\"", self.name(i)),
-                field: "velocity".into(),
-                problem: format!("velocity {velocity} and angular velocity {omega} must be finite"),
-            });
-        }
+        self.check_velocity(i, velocity, omega)?;
         let b = self.b_mut(i);
         b.velocity = velocity;
         b.omega = omega;
@@ -410,16 +404,7 @@ impl World {
     /// As those two; the world is unchanged on error.
     pub fn set_state(&mut self, h: BodyHandle, state: &BodyState) -> Result<(), SimError> {
         let i = self.dynamic_index(h, "state")?;
-        if !(state.velocity.is_finite() && state.omega.is_finite()) {
-            return Err(SimError::Invalid {
-                what: format!("body \"{}\"", self.name(i)),
-                field: "velocity".into(),
-                problem: format!(
-                    "velocity {} and angular velocity {} must be finite",
-                    state.velocity, state.omega
-                ),
-            });
-        }
+        self.check_velocity(i, state.velocity, state.omega)?;
         self.set_pose(h, state.position, state.rotation)?;
         self.set_velocity(h, state.velocity, state.omega)
     }
@@ -438,11 +423,8 @@ impl World {
     ) -> Result<(), SimError> {
         let i = self.dynamic_index(h, "impulse")?;
         if !(impulse.is_finite() && point.is_finite()) {
-            return Err(SimError::Invalid {
-                what: format!("body \"{}\"", self.name(i)),
-                field: "impulse".into(),
-                problem: format!("impulse {impulse} at {point} must be finite"),
-            });
+            let problem = format!("impulse {impulse} at {point} must be finite");
+            return Err(self.invalid(i, "impulse", problem));
         }
         self.b_mut(i).apply_impulse(impulse, point);
         self.mark_stale(i);
@@ -533,6 +515,28 @@ impl World {
             self.mark_stale(i);
         }
         Ok(())
+    }
+
+    /// An invalid-input error about body `i`'s `field`.
+    fn invalid(&self, i: u32, field: &str, problem: String) -> SimError {
+        SimError::Invalid {
+            what: format!("body \"{}\"", self.name(i)),
+            field: field.into(),
+            problem,
+        }
+    }
+
+    /// Refuses a non-finite velocity or angular velocity for body `i`.
+    fn check_velocity(&self, i: u32, velocity: DVec3, omega: DVec3) -> Result<(), SimError> {
+        if velocity.is_finite() && omega.is_finite() {
+            Ok(())
+        } else {
+            Err(self.invalid(
+                i,
+                "velocity",
+                format!("velocity {velocity} and angular velocity {omega} must be finite"),
+            ))
+        }
     }
 
     /// The slot of a live handle.

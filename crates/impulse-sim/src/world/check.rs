@@ -30,7 +30,7 @@ pub(super) struct Scan {
     others_key: f64,
     /// The closest piece pair (piece indices of the two bodies).
     pieces: (usize, usize),
-    /// How deep the bodies interpenetrate when touching (0 otherwise).
+    /// How deep the bodies interpenetrate along the normal when touching (0 otherwise).
     depth: f64,
     /// The two bodies' motions at the check (for their time-of-impact bound).
     motions: (Motion, Motion),
@@ -105,14 +105,25 @@ impl World {
                 }
             } else {
                 // Touching, overlapping, or so close that the closest points' direction is
-                // rounding noise: the separating axis.
-                let p = depth::separating_axis(&pa.convex, &pose_a, &pb.convex, &pose_b);
-                if p.normal.is_finite() {
-                    state.normals[slot] = Some(p.normal);
-                }
+                // rounding noise: the normal last seen at a clear gap, or, with none (bodies
+                // placed touching), the separating axis; the depth along it.
+                let n = match state.normals[slot] {
+                    Some(n) => n,
+                    None => {
+                        let p = depth::separating_axis(&pa.convex, &pose_a, &pb.convex, &pose_b);
+                        let n = p.normal;
+                        if n.is_finite() {
+                            state.normals[slot] = Some(n);
+                        }
+                        n
+                    }
+                };
                 if c.penetrating {
                     touching = true;
-                    depth = depth.max(p.depth);
+                    let along = depth::overlap_along(&pa.convex, &pose_a, &pb.convex, &pose_b, n);
+                    if along.is_finite() {
+                        depth = depth.max(along);
+                    }
                 }
             }
             let d = if c.penetrating { 0.0 } else { c.distance };
@@ -257,7 +268,7 @@ impl World {
             return Some(mid);
         };
         let eps = self.collision_epsilon();
-        let near = patch::near_vertices(x, &(ba.pose * pa.pose), y, &(bb.pose * pb.pose), eps);
+        let near = patch::near_vertices(x, &(ba.pose * pa.pose), y, &(bb.pose * pb.pose), n, eps);
         if near.is_empty() {
             return Some(mid);
         }
@@ -285,15 +296,27 @@ impl World {
     /// §2.4.3) — of the bodies whose motion the impulse changed: a fixed or scripted body's
     /// pairs stay valid.
     fn rekey_others(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
-        let mut others: Vec<(u32, u32)> = [pair.0, pair.1]
+        let moved: Vec<u32> = [pair.0, pair.1]
             .into_iter()
             .filter(|&b| self.b(b).is_dynamic())
-            .flat_map(|b| self.heap.pairs_of(b))
-            .filter(|p| *p != pair)
             .collect();
-        others.sort_unstable();
-        others.dedup();
-        for p in others {
+        self.rekey(&moved, Some(pair))
+    }
+
+    /// New bounds for every heap pair of `bodies` (but `except`).
+    pub(super) fn rekey(
+        &mut self,
+        bodies: &[u32],
+        except: Option<(u32, u32)>,
+    ) -> Result<(), SimError> {
+        let mut pairs: Vec<(u32, u32)> = bodies
+            .iter()
+            .flat_map(|&b| self.heap.pairs_of(b))
+            .filter(|p| Some(*p) != except)
+            .collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        for p in pairs {
             let key = self.bound(p);
             self.heap
                 .set_toi(p, key)

@@ -355,6 +355,8 @@ pub struct World {
     stale: Vec<u32>,
     /// The checking mode's monitor ([`World::set_checking`]).
     checking: Option<PenetrationMonitor>,
+    /// Scratch: the moving bodies' motions in the current step (id, motion, box growth).
+    moving: Vec<(u32, impulse_collide::Motion, f64)>,
     #[cfg(test)]
     pub(crate) faults: Faults,
 }
@@ -437,6 +439,7 @@ impl World {
             loads: Vec::new(),
             stale: Vec::new(),
             checking: None,
+            moving: Vec::new(),
             #[cfg(test)]
             faults: Faults::default(),
         })

@@ -114,25 +114,29 @@ impl World {
             .peek()
             .map_or(limit, |(_, k)| k.min(limit))
             .min(self.next_load_time());
-        let moving: Vec<u32> = self
-            .bodies()
-            .filter(|(_, b)| b.kind != BodyKind::Fixed)
-            .map(|(h, _)| h.index())
-            .collect();
-        for &i in &moving {
-            if let Motion::Unbounded { .. } = self.b(i).motion(self.gravity) {
+        // Every moving body's motion, once per step (a scratch buffer kept between steps).
+        let (g, eps) = (self.gravity, self.collision_epsilon());
+        let mut moving = std::mem::take(&mut self.moving);
+        moving.clear();
+        for (i, slot) in self.slots.iter().enumerate() {
+            let Some(b) = &slot.body else { continue };
+            if b.kind == BodyKind::Fixed {
+                continue;
+            }
+            let motion = b.motion(g);
+            if let Motion::Unbounded { .. } = motion {
                 return Err(self.runtime(format!(
                     "body {}: its motion cannot be bounded (velocity {}, angular velocity {})",
-                    self.name(i),
-                    self.b(i).velocity,
-                    self.b(i).omega
+                    b.name, b.velocity, b.omega
                 )));
             }
+            moving.push((i as u32, motion, b.r_max + eps));
         }
         // 2. Swept boxes; halve the step while a box would cover too many tiles.
+        let mut failed = None;
         'boxes: loop {
-            for &i in &moving {
-                let b = self.swept_box(i, t_end - t0);
+            for &(i, motion, grow) in &moving {
+                let b = motion.swept_com_aabb(t_end - t0).expanded(grow);
                 match self.hash_mut().update(i, b) {
                     Ok(()) => {}
                     Err(BroadphaseError::TooManyCells { .. }) if t_end - t0 > 0.0 => {
@@ -140,13 +144,16 @@ impl World {
                         continue 'boxes;
                     }
                     Err(e) => {
-                        return Err(
-                            self.runtime(format!("broad phase, body {}: {e}", self.name(i)))
-                        );
+                        failed = Some((i, e));
+                        break 'boxes;
                     }
                 }
             }
             break;
+        }
+        self.moving = moving;
+        if let Some((i, e)) = failed {
+            return Err(self.runtime(format!("broad phase, body {}: {e}", self.name(i))));
         }
         self.promote_new_pairs()?;
         if let Some((_, k)) = self.heap.peek() {
@@ -278,17 +285,7 @@ impl World {
     /// New bounds for every heap pair of the bodies the program (or a load) changed.
     fn rekey_stale(&mut self) -> Result<(), SimError> {
         let stale = std::mem::take(&mut self.stale);
-        let mut pairs: Vec<(u32, u32)> =
-            stale.iter().flat_map(|&i| self.heap.pairs_of(i)).collect();
-        pairs.sort_unstable();
-        pairs.dedup();
-        for p in pairs {
-            let key = self.bound(p);
-            self.heap
-                .set_toi(p, key)
-                .map_err(|e| self.runtime(format!("collision heap: {e}")))?;
-        }
-        Ok(())
+        self.rekey(&stale, None)
     }
 }
 

@@ -101,13 +101,7 @@ pub(super) fn checks() -> Vec<SceneCheck> {
 
 /// The restitution of the contact between bodies `a` and `b`.
 fn restitution(r: &Run<'_>, a: &str, b: &str) -> Result<f64, String> {
-    let (ma, mb) = (&r.desc(a)?.material, &r.desc(b)?.material);
-    Ok(r.scene
-        .desc
-        .contacts
-        .iter()
-        .find(|c| (&c.a == ma && &c.b == mb) || (&c.a == mb && &c.b == ma))
-        .map_or(r.scene.desc.default_contact.restitution, |c| c.restitution))
+    Ok(super::contact(r, a, b)?.restitution)
 }
 
 fn v9_two_ball(r: &Run<'_>) -> Result<Vec<Metric>, String> {

@@ -27,7 +27,7 @@ mod sliding;
 use std::path::{Path, PathBuf};
 
 use glam::{DQuat, DVec3};
-use impulse_sim::scene::{BodyDesc, RotationDesc, ShapeDesc};
+use impulse_sim::scene::{BodyDesc, ContactDesc, RotationDesc, ShapeDesc};
 use impulse_sim::{Recording, Scene, World, run};
 
 use crate::validate::case::{Case, Check, Metric};
@@ -188,6 +188,19 @@ impl Run<'_> {
             .last()
             .ok_or_else(|| "no frames".to_string())
     }
+}
+
+/// The contact of bodies `a` and `b` of the scene: their material pair's, else the default.
+fn contact(r: &Run<'_>, a: &str, b: &str) -> Result<ContactDesc, String> {
+    let (ma, mb) = (&r.desc(a)?.material, &r.desc(b)?.material);
+    Ok(r.scene
+        .desc
+        .contacts
+        .iter()
+        .find(|c| (&c.a == ma && &c.b == mb) || (&c.a == mb && &c.b == ma))
+        .map_or(r.scene.desc.default_contact, |c| {
+            ContactDesc::new(c.friction, c.restitution)
+        }))
 }
 
 /// The description of body `name` in a scene.

@@ -62,16 +62,9 @@ pub(super) fn checks() -> Vec<SceneCheck> {
     ]
 }
 
-/// μ of the contact between bodies `a` and `b` of the scene (their material pair, else the
-/// default contact).
+/// μ of the contact between bodies `a` and `b` of the scene.
 pub(super) fn friction(r: &Run<'_>, a: &str, b: &str) -> Result<f64, String> {
-    let (ma, mb) = (&r.desc(a)?.material, &r.desc(b)?.material);
-    Ok(r.scene
-        .desc
-        .contacts
-        .iter()
-        .find(|c| (&c.a == ma && &c.b == mb) || (&c.a == mb && &c.b == ma))
-        .map_or(r.scene.desc.default_contact.friction, |c| c.friction))
+    Ok(super::contact(r, a, b)?.friction)
 }
 
 fn v6_block_on_ramp(r: &Run<'_>) -> Result<Vec<Metric>, String> {
