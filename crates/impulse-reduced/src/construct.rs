@@ -3,7 +3,7 @@
 //! rank checked, and the twist maps of the internal links.
 
 use faer::Mat;
-use impulse_geom::{Mat6, Pose, SpatialInertia, Wrench};
+use impulse_geom::{Mat6, Pose, SpatialInertia, Twist, Wrench};
 
 use crate::error::Error;
 use crate::linalg::{Tsvd, null_space, pinv, pinv_rank, rank_scaled, to_faer};
@@ -306,6 +306,36 @@ impl ReducedModel {
     pub fn twist_map(&self, k: usize) -> &[f64] {
         let w = 36 * self.end_effectors.len();
         &self.twist_maps[k * w..(k + 1) * w]
+    }
+
+    /// The static response of the reduced model to stacked end-effector body wrenches `w`
+    /// (relative to the bias `b`): end-effector twists `C w` (eq. 5) and internal-link twists
+    /// `Σ_e ⁱT_e ᵉw_e` (eq. 22), both body frames at the reference poses.
+    #[must_use]
+    pub fn static_twists(&self, w: &[f64]) -> (Vec<Twist>, Vec<Twist>) {
+        let ne = self.end_effectors.len();
+        let ee = (0..ne)
+            .map(|i| {
+                Twist::from_array(core::array::from_fn(|r| {
+                    (0..6 * ne)
+                        .map(|c| self.compliance[(6 * i + r, c)] * w[c])
+                        .sum()
+                }))
+            })
+            .collect();
+        let internal = (0..self.internal.len())
+            .map(|k| {
+                let t = self.twist_map(k);
+                Twist::from_array(core::array::from_fn(|r| {
+                    t[r * 6 * ne..(r + 1) * 6 * ne]
+                        .iter()
+                        .zip(w)
+                        .map(|(a, b)| a * b)
+                        .sum()
+                }))
+            })
+            .collect();
+        (ee, internal)
     }
 
     /// Stacked end-effector wrench vector from per-end-effector body wrenches.

@@ -102,7 +102,7 @@ pub fn pinv_scaled(a: MatRef<'_, f64>, tsvd: Tsvd, scale: f64) -> Result<Pinv, E
 /// Pseudo-inverse of the symmetric positive semi-definite `a` truncated to exactly `r`
 /// singular values, after checking that the spectrum has a clear gap there: `σ_r` above the
 /// eq. 9 threshold (with `‖A‖ = max(σ_max, scale)`, see [`pinv_scaled`]) and `σ_{r+1}` at most
-/// `gap · σ_r`. Returns the inverse and the singular values; on a failed check, the
+/// `gap · σ_r` (for `r = 0`, `σ_1` at most `gap · scale`). Returns the inverse and the singular values; on a failed check, the
 /// [`Error::Rank`] names `at`.
 ///
 /// # Errors
@@ -134,7 +134,10 @@ pub fn pinv_rank(
     let threshold = tsvd.threshold(m, n, sv.iter().fold(scale, |acc, &x| acc.max(x)));
     let found = sv.iter().filter(|&&x| x > threshold).count();
     let ok_low = r == 0 || (r <= k && sv[r - 1] > threshold);
-    let ok_gap = r >= k || r == 0 && sv[0] <= threshold || r > 0 && sv[r] <= gap * sv[r - 1];
+    // Rank 0 (a locked mechanism): everything left must be negligible against the inputs.
+    let ok_gap = r >= k
+        || r == 0 && sv[0] <= threshold.max(gap * scale)
+        || r > 0 && sv[r] <= gap * sv[r - 1];
     if !(ok_low && ok_gap) {
         return Err(Error::Rank {
             at: at.to_owned(),

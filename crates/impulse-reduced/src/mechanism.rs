@@ -495,3 +495,7 @@ pub(crate) fn compile(desc: &MechanismDesc) -> Result<Mechanism, Error> {
         ndof: offset,
     })
 }
+
+#[cfg(test)]
+#[path = "mechanism_tests.rs"]
+mod tests;
