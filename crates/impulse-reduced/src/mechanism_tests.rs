@@ -80,10 +80,13 @@ fn err(f: impl FnOnce(&mut MechanismDesc)) -> String {
     d.build().unwrap_err().to_string()
 }
 
+/// One edit of the valid description.
+type Edit = Box<dyn FnOnce(&mut MechanismDesc)>;
+
 #[test]
 fn bad_descriptions_name_the_culprit() {
     // Each edit breaks the valid mechanism in one way; the message must name what and where.
-    let cases: Vec<(Box<dyn FnOnce(&mut MechanismDesc)>, &[&str])> = vec![
+    let cases: Vec<(Edit, &[&str])> = vec![
         (
             Box::new(|d| d.links[1].position[0] = f64::NAN),
             &["link `a`", "position", "not finite"],
