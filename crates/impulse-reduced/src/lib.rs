@@ -22,9 +22,11 @@
 
 pub mod construct;
 mod desc;
+pub mod dynamics;
 mod error;
 pub mod linalg;
 mod mechanism;
+pub mod obstacle;
 pub mod reference;
 pub mod scenes;
 #[cfg(test)]
@@ -34,6 +36,8 @@ pub mod walk;
 
 pub use construct::{ConstructOptions, MassModel, ReducedModel};
 pub use desc::{BaseDesc, JointDesc, JointKindDesc, LinkDesc, MechanismDesc, ShapeDesc};
+pub use dynamics::{BaseState, ContactParams, ReducedSim, StepReport};
 pub use error::Error;
 pub use linalg::Tsvd;
 pub use mechanism::{Direction, Joint, Link, Mechanism, Shape};
+pub use obstacle::{HeightField, Obstacle};

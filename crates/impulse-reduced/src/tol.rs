@@ -43,3 +43,19 @@ pub const STATIC_MIN_STEP: f64 = 1.0 / 1024.0;
 /// and random mechanisms; the physical spectrum of a compliance spans at most the square of
 /// the compliance range. 1e-6 separates the two with room on both sides.
 pub const RANK_GAP: f64 = 1e-4;
+
+/// Projected Gauss–Seidel sweeps allowed per step (contacts of a few end effectors converge
+/// in tens of sweeps; the cap bounds the cost of a badly conditioned step).
+pub const PGS_ITERATIONS: usize = 200;
+
+/// PGS stops when no impulse changed by more than this fraction of the largest normal impulse
+/// in a sweep (dimensionless).
+pub const PGS_TOLERANCE: f64 = 1e-10;
+
+/// Fraction of a penetration removed per step (dimensionless): 0.2 removes it in a few steps
+/// without the energy gain of a full correction.
+pub const CONTACT_ERP: f64 = 0.2;
+
+/// Default contact margin (m): shape points closer than this to an obstacle are contacts, so
+/// a contact is seen one step before it closes. Mechanisms in other units set it explicitly.
+pub const CONTACT_MARGIN: f64 = 1e-2;
