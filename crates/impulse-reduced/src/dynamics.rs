@@ -226,6 +226,15 @@ impl ReducedSim {
         Twist::from_array(core::array::from_fn(|r| v[6 * i + r]))
     }
 
+    /// Writes every internal link's world pose (one per `model.internal`) from the current
+    /// end-effector twists, in parallel (see [`crate::internal`]).
+    pub fn internal_poses(&self, out: &mut [Pose]) {
+        let frame = self
+            .base
+            .map_or(Pose::IDENTITY, |b| b.pose * self.base_rest.inverse());
+        crate::internal::update_internal_links(&self.model, &self.xi, &frame, out);
+    }
+
     /// Total energy of the end-effector system, `½φᵀMφ + ½ξᵀKξ` (J), relative to the bias.
     #[must_use]
     pub fn energy(&self) -> f64 {

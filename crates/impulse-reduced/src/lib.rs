@@ -24,6 +24,7 @@ pub mod construct;
 mod desc;
 pub mod dynamics;
 mod error;
+pub mod internal;
 pub mod linalg;
 mod mechanism;
 pub mod obstacle;

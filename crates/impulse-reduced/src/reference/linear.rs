@@ -55,20 +55,26 @@ impl LinearStatics {
                 }
             }
         }
-        let z = null_space(g.as_ref(), tsvd)?;
-        let kq: Vec<f64> = m
+        let c: Vec<f64> = m
             .joints
             .iter()
-            .flat_map(|j| j.compliance.iter().map(|c| 1.0 / c))
+            .flat_map(|j| j.compliance.iter().copied())
             .collect();
-        // Zᵀ K_q Z, symmetric positive definite (K_q is).
-        let kz = Mat::from_fn(z.ncols(), z.ncols(), |a, b| {
-            (0..m.ndof)
-                .map(|i| z[(i, a)] * kq[i] * z[(i, b)])
-                .sum::<f64>()
-        });
-        let cz = pinv(kz.as_ref(), tsvd)?.inverse;
-        let joint_compliance = &z * &cz * z.transpose();
+        let (z, joint_compliance) = if nl == 0 {
+            // A tree: Z = I and C_θ = diag(c).
+            (
+                Mat::<f64>::identity(m.ndof, m.ndof),
+                Mat::from_fn(m.ndof, m.ndof, |a, b| if a == b { c[a] } else { 0.0 }),
+            )
+        } else {
+            let z = null_space(g.as_ref(), tsvd)?;
+            // Zᵀ K_q Z, symmetric positive definite (K_q is).
+            let kz_half = Mat::from_fn(m.ndof, z.ncols(), |i, a| z[(i, a)] / c[i].sqrt());
+            let kz = kz_half.transpose() * &kz_half;
+            let cz = pinv(kz.as_ref(), tsvd)?.inverse;
+            let jc = &z * &cz * z.transpose();
+            (z, jc)
+        };
         Ok(LinearStatics {
             config: q.clone(),
             poses,
