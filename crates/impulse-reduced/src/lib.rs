@@ -20,6 +20,7 @@
 //! ξ is a small body-frame displacement twist (`H_ξ = H·exp(ξ)`, eq. 6), φ a body velocity.
 #![forbid(unsafe_code)]
 
+pub mod blend;
 pub mod construct;
 mod desc;
 pub mod dynamics;
@@ -30,6 +31,7 @@ mod mechanism;
 pub mod obstacle;
 pub mod reference;
 pub mod scenes;
+pub mod study;
 #[cfg(test)]
 mod testutil;
 pub mod tol;

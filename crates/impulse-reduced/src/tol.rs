@@ -59,3 +59,10 @@ pub const CONTACT_ERP: f64 = 0.2;
 /// Default contact margin (m): shape points closer than this to an obstacle are contacts, so
 /// a contact is seen one step before it closes. Mechanisms in other units set it explicitly.
 pub const CONTACT_MARGIN: f64 = 1e-2;
+
+/// Iterations allowed to the fixed point of a blended model's statics.
+pub const BLEND_STATIC_ITERATIONS: usize = 500;
+
+/// The blended statics stop when the end effectors move less than this in a pass (scaled
+/// twist norm, dimensionless: lengths over the bounding radius, angles over π).
+pub const BLEND_STATIC_TOLERANCE: f64 = 1e-13;
