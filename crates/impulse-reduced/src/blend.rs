@@ -67,15 +67,16 @@ impl Eigen {
     }
 }
 
-/// Shepard weights (eq. 25) from per-model distances; a zero distance takes all the weight.
+/// Shepard weights (eq. 25) from per-model distances with exponent `power` (the paper's p);
+/// a zero distance takes all the weight.
 #[must_use]
-pub fn shepard_weights(distances: &[f64]) -> Vec<f64> {
+pub fn shepard_weights(distances: &[f64], power: f64) -> Vec<f64> {
     if let Some(i) = distances.iter().position(|&d| d <= 0.0) {
         let mut w = vec![0.0; distances.len()];
         w[i] = 1.0;
         return w;
     }
-    let raw: Vec<f64> = distances.iter().map(|d| d.powf(-SHEPARD_POWER)).collect();
+    let raw: Vec<f64> = distances.iter().map(|d| d.powf(-power)).collect();
     let s: f64 = raw.iter().sum();
     raw.iter().map(|x| x / s).collect()
 }
@@ -217,6 +218,8 @@ pub struct BlendedModel {
     rest: Vec<Pose>,
     /// Bounding radius r (eq. 25).
     pub radius: f64,
+    /// Shepard exponent p (eq. 25; [`SHEPARD_POWER`] unless changed).
+    pub power: f64,
 }
 
 /// The blended end-effector system at one state (Algorithm 5's per-step quantities).
@@ -266,6 +269,7 @@ impl BlendedModel {
             dcomp,
             rest,
             radius,
+            power: SHEPARD_POWER,
         })
     }
 
@@ -287,7 +291,7 @@ impl BlendedModel {
                     .sum()
             })
             .collect();
-        shepard_weights(&d)
+        shepard_weights(&d, self.power)
     }
 
     /// The blended system for end effectors at `ee` (Algorithm 5, before the step).

@@ -19,10 +19,10 @@ fn random_spd(rng: &mut rand::rngs::Xoshiro256PlusPlus, n: usize, rank: usize) -
 
 #[test]
 fn shepard_weights_interpolate_and_sum_to_one() {
-    assert_eq!(shepard_weights(&[0.3, 0.0, 2.0]), vec![0.0, 1.0, 0.0]);
-    let w = shepard_weights(&[1.0, 2.0]);
+    assert_eq!(shepard_weights(&[0.3, 0.0, 2.0], 2.0), vec![0.0, 1.0, 0.0]);
+    let w = shepard_weights(&[1.0, 2.0], 2.0);
     assert!((w[0] - 0.8).abs() < 1e-15 && (w[1] - 0.2).abs() < 1e-15);
-    assert!((shepard_weights(&[0.1, 0.7, 3.0]).iter().sum::<f64>() - 1.0).abs() < 1e-15);
+    assert!((shepard_weights(&[0.1, 0.7, 3.0], 2.0).iter().sum::<f64>() - 1.0).abs() < 1e-15);
 }
 
 #[test]

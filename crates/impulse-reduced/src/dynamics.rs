@@ -235,6 +235,23 @@ impl ReducedSim {
         crate::internal::update_internal_links(&self.model, &self.xi, &frame, out);
     }
 
+    /// Per-step error estimate: the relative constraint error (§8.2) of the reconstructed
+    /// mechanism (end effectors and every internal link), so a user sees when the reduced
+    /// model leaves its range. Costs one internal-link update.
+    #[must_use]
+    pub fn constraint_error(&self, m: &Mechanism) -> f64 {
+        let mut internal = vec![Pose::IDENTITY; self.model.internal.len()];
+        self.internal_poses(&mut internal);
+        let ee: Vec<Pose> = (0..self.model.end_effectors.len())
+            .map(|i| self.end_effector_pose(i))
+            .collect();
+        let mut poses = crate::study::assemble(m, &self.model, &ee, &internal);
+        if let Some(b) = &self.base {
+            poses[m.base] = b.pose;
+        }
+        crate::study::constraint_error(m, &poses)
+    }
+
     /// Total energy of the end-effector system, `½φᵀMφ + ½ξᵀKξ` (J), relative to the bias.
     #[must_use]
     pub fn energy(&self) -> f64 {

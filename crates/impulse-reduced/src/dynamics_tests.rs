@@ -269,3 +269,26 @@ fn pushed_block_sticks_below_mu_n_and_slides_above() {
 /// Backward Euler at h = 1 ms against the exact parabola over 1000 steps: O(h) = 0.1 %, plus
 /// the soft weld's spring.
 const SLIDE_REL: f64 = 0.01;
+
+#[test]
+fn error_estimate_grows_with_the_load() {
+    // The per-step estimate is zero at rest and grows quadratically with a static load (the
+    // reduced statics are exact to first order).
+    let m = crate::scenes::y_shape(4).build().unwrap();
+    let mut errs = Vec::new();
+    for f in [10.0, 20.0, 40.0] {
+        let mut s = sim(&m, 1e-3);
+        assert!(s.constraint_error(&m) < 1e-15);
+        let w = [f, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let xi: Vec<f64> = (0..12)
+            .map(|r| (0..12).map(|c| s.model.compliance[(r, c)] * w[c]).sum())
+            .collect();
+        s.xi = xi;
+        errs.push(s.constraint_error(&m));
+    }
+    println!("error estimate at 10, 20, 40 N: {errs:?}");
+    for k in 0..2 {
+        let ratio = errs[k + 1] / errs[k];
+        assert!((ratio - 4.0).abs() < 0.2, "{ratio}");
+    }
+}

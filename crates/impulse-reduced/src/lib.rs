@@ -31,6 +31,7 @@ mod mechanism;
 pub mod obstacle;
 pub mod reference;
 pub mod scenes;
+pub mod select;
 pub mod study;
 #[cfg(test)]
 mod testutil;
