@@ -372,3 +372,98 @@ pub fn legged_robot(legs: usize) -> MechanismDesc {
     }
     d
 }
+
+/// The bundled fixtures: file stem and generator.
+#[must_use]
+pub fn bundled() -> Vec<(&'static str, MechanismDesc)> {
+    vec![
+        ("helix-50", helix(50)),
+        ("helix-100", helix(100)),
+        ("helix-200", helix(200)),
+        ("helix-400", helix(400)),
+        ("ladder-36", ladder(36)),
+        ("ladder-48", ladder(48)),
+        ("y", y_shape(4)),
+        ("loop", ring(10)),
+        ("robot-arm-20", robot_arm(20)),
+        ("legged-6", legged_robot(6)),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::construct::{ConstructOptions, ReducedModel};
+    use crate::dynamics::ReducedSim;
+    use crate::obstacle::{HeightField, Obstacle};
+    use crate::reference::Configuration;
+
+    fn fixture_dir() -> std::path::PathBuf {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/mechanisms")
+    }
+
+    /// The files in `fixtures/mechanisms/` are exactly the generators' output (regenerate with
+    /// `IMPULSE_UPDATE_FIXTURES=1 cargo test -p impulse-reduced fixtures`), and every one builds.
+    #[test]
+    fn fixtures_match_generators_and_build() {
+        let dir = fixture_dir();
+        for (stem, desc) in bundled() {
+            let path = dir.join(format!("{stem}.ron"));
+            let text = desc.to_ron().unwrap();
+            if std::env::var_os("IMPULSE_UPDATE_FIXTURES").is_some() {
+                std::fs::create_dir_all(&dir).unwrap();
+                std::fs::write(&path, &text).unwrap();
+            }
+            let on_disk = std::fs::read_to_string(&path)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            assert_eq!(MechanismDesc::from_ron(&on_disk).unwrap(), desc, "{stem}");
+            let m = desc.build().unwrap_or_else(|e| panic!("{stem}: {e}"));
+            assert!(!m.end_effectors.is_empty());
+        }
+    }
+
+    #[test]
+    fn legged_robot_settles_on_uneven_terrain() {
+        let m = legged_robot(6).build().unwrap();
+        let model = ReducedModel::build(
+            &m,
+            &Configuration::rest(&m),
+            &[],
+            &ConstructOptions::default(),
+        )
+        .unwrap();
+        let mut s = ReducedSim::new(&m, model, 1e-3).unwrap();
+        // Bumpy ground: heights up to ±1.5 cm on a 5 cm grid, the feet start 1–3 cm above it.
+        let (nx, ny) = (41, 41);
+        let heights = (0..nx * ny)
+            .map(|k| {
+                let (i, j) = ((k % nx) as f64, (k / nx) as f64);
+                0.015 * (0.9 * i).sin() * (0.7 * j).cos() - 0.01
+            })
+            .collect();
+        s.obstacles.push(Obstacle::HeightField(HeightField {
+            origin: [-1.0, -1.0],
+            spacing: 0.05,
+            nx,
+            ny,
+            heights,
+        }));
+        s.contact.friction = 0.8;
+        let mass = s.model.base_inertia.mass;
+        let mut last = crate::dynamics::StepReport::default();
+        for _ in 0..3000 {
+            last = s.step();
+        }
+        let p = s.linear_momentum();
+        let speed = p.length() / mass;
+        println!(
+            "legged-6 after 3 s: {} contacts, base speed {speed:.2e} m/s, base height {:.4} m",
+            last.contacts,
+            s.base.unwrap().pose.translation.z
+        );
+        assert!(last.contacts >= 3, "the robot stands on its feet");
+        assert!(speed < 1e-3, "settled: {speed}");
+        // Standing, not sunk: the body stays well above the ground.
+        assert!(s.base.unwrap().pose.translation.z > 0.1);
+    }
+}
