@@ -40,8 +40,10 @@ pub struct ConstructOptions {
 ///
 /// Layout: end-effector vectors are stacked 6-blocks in `end_effectors` order (body frames of
 /// the end effectors at the reference poses, linear on top). `twist_maps` is contiguous:
-/// internal link k (of `internal`) owns the row-major 6 × 6|E| block starting at
-/// `k · 36|E|`, mapping the stacked end-effector wrench to the link's body twist (eq. 22).
+/// internal link k (of `internal`) owns the **column-major** 6 × 6|E| block starting at
+/// `k · 36|E|` (each column's six twist components adjacent, so the product with the stacked
+/// end-effector wrench is six independent running sums), mapping the stacked end-effector
+/// wrench to the link's body twist (eq. 22).
 #[derive(Clone, Debug)]
 pub struct ReducedModel {
     /// The linearisation point.
@@ -248,9 +250,10 @@ impl ReducedModel {
         let internal = m.internal_links();
         let mut twist_maps = Vec::with_capacity(internal.len() * 36 * ne);
         for &l in &internal {
-            for r in 0..6 {
-                for b in &cw.to_end_effectors[l] {
-                    twist_maps.extend_from_slice(&b.to_rows()[r]);
+            for b in &cw.to_end_effectors[l] {
+                let rows = b.to_rows();
+                for c in 0..6 {
+                    twist_maps.extend(rows.iter().map(|row| row[c]));
                 }
             }
         }
@@ -301,7 +304,7 @@ impl ReducedModel {
         self.end_effectors.len()
     }
 
-    /// The twist map of internal link number `k` (row-major 6 × 6|E|).
+    /// The twist map of internal link number `k` (column-major 6 × 6|E|).
     #[must_use]
     pub fn twist_map(&self, k: usize) -> &[f64] {
         let w = 36 * self.end_effectors.len();
@@ -324,16 +327,7 @@ impl ReducedModel {
             })
             .collect();
         let internal = (0..self.internal.len())
-            .map(|k| {
-                let t = self.twist_map(k);
-                Twist::from_array(core::array::from_fn(|r| {
-                    t[r * 6 * ne..(r + 1) * 6 * ne]
-                        .iter()
-                        .zip(w)
-                        .map(|(a, b)| a * b)
-                        .sum()
-                }))
-            })
+            .map(|k| crate::internal::link_twist(self, k, w))
             .collect();
         (ee, internal)
     }

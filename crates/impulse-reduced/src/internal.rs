@@ -30,11 +30,14 @@ pub fn equivalent_wrenches(model: &ReducedModel, xi: &[f64]) -> Vec<f64> {
 #[must_use]
 pub fn link_twist(model: &ReducedModel, k: usize, w: &[f64]) -> Twist {
     let t = model.twist_map(k);
-    let n = w.len();
-    Twist::from_array(core::array::from_fn(|r| {
-        let row = &t[r * n..(r + 1) * n];
-        row.iter().zip(w).fold(0.0, |acc, (a, b)| acc + a * b)
-    }))
+    // Column-major: six independent running sums, one column (6 adjacent values) at a time.
+    let mut acc = [0.0; 6];
+    for (col, wc) in t.chunks_exact(6).zip(w) {
+        for (a, x) in acc.iter_mut().zip(col) {
+            *a += x * wc;
+        }
+    }
+    Twist::from_array(acc)
 }
 
 /// Writes every internal link's world pose `frame · H_l exp(ξ_l)` into `out` (one per
@@ -50,13 +53,15 @@ pub fn update_internal_links(model: &ReducedModel, xi: &[f64], frame: &Pose, out
         "one output pose per internal link"
     );
     let w = equivalent_wrenches(model, xi);
+    let moving = *frame != Pose::IDENTITY;
     out.par_chunks_mut(LINK_BATCH)
         .enumerate()
         .for_each(|(batch, chunk)| {
             for (i, pose) in chunk.iter_mut().enumerate() {
                 let k = batch * LINK_BATCH + i;
                 let xi_l = link_twist(model, k, &w);
-                *pose = *frame * model.internal_reference[k] * Pose::exp(&xi_l);
+                let local = model.internal_reference[k] * Pose::exp(&xi_l);
+                *pose = if moving { *frame * local } else { local };
             }
         });
 }
