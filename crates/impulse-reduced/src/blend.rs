@@ -392,6 +392,51 @@ impl BlendedModel {
     }
 }
 
+impl BlendedModel {
+    /// One step of Algorithm 5 (fixed base, no contact): weights at the current end-effector
+    /// poses `ee`, blended matrices and references, `ξ = log(H̄_e⁻¹ H_e)`, backward Euler of eq. 24
+    /// with the system matrix of the [fix]ed eq. 23 (re-factored every step: it changes with
+    /// the blend), `H_e ← H_e exp(h φ)`. `phi` and the stacked body wrenches `w` are per end
+    /// effector in its body frame. Returns the blend used (its weights place the internal
+    /// links through [`BlendedModel::internal_poses`]).
+    ///
+    /// # Errors
+    /// Errors of [`BlendedModel::blend`] and of the factorisation.
+    pub fn step(
+        &self,
+        ee: &mut [Pose],
+        phi: &mut [f64],
+        w: &[f64],
+        h: f64,
+    ) -> Result<Blend, Error> {
+        let b = self.blend(ee)?;
+        let n = phi.len();
+        let xi: Vec<f64> = ee
+            .iter()
+            .zip(&b.reference)
+            .flat_map(|(p, r)| (r.inverse() * *p).log().to_array())
+            .collect();
+        let a = &b.mass + &b.damping * h + &b.stiffness * (h * h);
+        let a_inv = crate::linalg::pinv(a.as_ref(), Tsvd::default())?.inverse;
+        let rhs: Vec<f64> = (0..n)
+            .map(|r| {
+                (0..n)
+                    .map(|c| b.mass[(r, c)] * phi[c] - h * b.stiffness[(r, c)] * xi[c])
+                    .sum::<f64>()
+                    + h * (w[r] - b.bias[r])
+            })
+            .collect();
+        for (r, p) in phi.iter_mut().enumerate() {
+            *p = (0..n).map(|c| a_inv[(r, c)] * rhs[c]).sum();
+        }
+        for (e, pose) in ee.iter_mut().enumerate() {
+            let t = Twist::from_array(core::array::from_fn(|k| phi[6 * e + k] * h));
+            *pose = *pose * Pose::exp(&t);
+        }
+        Ok(b)
+    }
+}
+
 /// Static equilibrium of a blended model (fixed base) under constant stacked world loads
 /// `force_torque` (per end effector: force then torque, world): the fixed point
 /// `H_e = H̄_e exp(C̄ (w(H_e) − b̄))` of Algorithm 5 at rest, by successive substitution from

@@ -165,3 +165,28 @@ fn fig7_y_blended_is_exact_at_samples_and_beats_single() {
     );
     assert!(blended <= single / 3.0);
 }
+
+#[test]
+fn blended_step_with_one_model_follows_the_single_model() {
+    // One model: Algorithm 5 is the single-model step (poses by exp instead of additive ξ,
+    // which agree to second order in the step's motion).
+    let m = crate::scenes::robot_arm(6).build().unwrap();
+    let q = crate::reference::Configuration::rest(&m);
+    let model = ReducedModel::build(&m, &q, &[], &ConstructOptions::default()).unwrap();
+    let rest: Vec<Pose> = model.reference.clone();
+    let set = BlendedModel::new(vec![model.clone()], rest.clone(), m.bounding_radius()).unwrap();
+    let mut sim = crate::dynamics::ReducedSim::new(&m, model, 1e-3).unwrap();
+    sim.gravity = DVec3::ZERO;
+    sim.external[0] = 2.0;
+    let (mut ee, mut phi) = (rest.clone(), vec![0.0; 6]);
+    let w = sim.external.clone();
+    for _ in 0..200 {
+        sim.step();
+        set.step(&mut ee, &mut phi, &w, 1e-3).unwrap();
+    }
+    let d = (sim.end_effector_pose(0).inverse() * ee[0]).log();
+    let size = (rest[0].inverse() * ee[0]).log();
+    let rel = scaled_norm(&d, 1.0) / scaled_norm(&size, 1.0);
+    println!("blended (1 model) vs single step after 200 steps: {rel:.2e} relative");
+    assert!(rel < 1e-3);
+}
