@@ -146,7 +146,19 @@ fn fig7_y_blended_is_exact_at_samples_and_beats_single() {
     let dir = DVec3::new(1.0, 0.0, 0.0);
     let loads: Vec<f64> = (1..=12).map(|k| 40.0 * k as f64).collect();
     let samples = [120.0, 240.0, 360.0, 480.0];
-    let (rows, _) = fig7(&m, 0, dir, &loads, &samples, &ConstructOptions::default()).unwrap();
+    let (rows, _) = fig7(
+        &m,
+        0,
+        dir,
+        &loads,
+        &samples,
+        &ConstructOptions::default(),
+        &crate::reference::StaticOptions {
+            load_steps: 4,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     for r in &rows {
         println!(
             "load {:6.1} N: displacement {:.3}, single {:.3e}, blended {:.3e}, EE pose error single {:.2e} blended {:.2e}",

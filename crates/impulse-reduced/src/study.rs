@@ -96,6 +96,7 @@ pub fn fig7(
     loads: &[f64],
     samples: &[f64],
     options: &ConstructOptions,
+    statics: &StaticOptions,
 ) -> Result<(Vec<Fig7Row>, Vec<f64>), Error> {
     let link = m.end_effectors[ee];
     let rest = Configuration::rest(m);
@@ -104,10 +105,7 @@ pub fn fig7(
         force: direction * s,
         torque: DVec3::ZERO,
     };
-    let statics = StaticOptions {
-        load_steps: 4,
-        ..StaticOptions::default()
-    };
+    let statics = *statics;
     let mut models = vec![ReducedModel::build(m, &rest, &[], options)?];
     let mut warm: Option<StaticSolution> = None;
     for &s in samples {
