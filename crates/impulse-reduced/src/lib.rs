@@ -8,7 +8,16 @@
 //! - the full nonlinear reference of the same mechanisms ([`reference`]): kinematics, exact
 //!   Jacobians, linearised constrained statics (the Schur complement at the end effectors) and
 //!   nonlinear statics with loop closure;
-//! - the construction of the reduced model (§4–5, [`construct`]).
+//! - the construction of the reduced model (§4–5): the chain/split/merge walk
+//!   ([`walk`], Algorithm 1, exact for any DAG walkable from the base), truncated SVD with a
+//!   rank check ([`linalg`], eq. 9), coupled compliance, accelerability (the paper's projection
+//!   or the exact `J M⁻¹ Jᵀ`), damping and the twist maps ([`construct`]);
+//! - reduced dynamics (§6, [`dynamics`]): backward Euler with eq. 23's sign fixed, projected
+//!   Gauss–Seidel contact with Coulomb friction against [`obstacle`]s, a free base; internal
+//!   links in parallel ([`internal`]);
+//! - blending of several linearisation points (§7, [`blend`]), their automatic choice
+//!   ([`select`], beyond the paper), the Fig. 7 study ([`study`]) and the bundled mechanisms
+//!   ([`scenes`]).
 //!
 //! **Must not know** about worlds, scenes, recording or files other than its own `Mechanism(...)`
 //! RON. Contact geometry here is only the fixed planes, boxes and height fields an end effector
