@@ -631,8 +631,7 @@ pub fn so3_exp(rotvec: DVec3) -> DQuat {
             1.0 + theta_sq
                 * (-1.0 / 8.0
                     + theta_sq
-                        * (1.0 / 384.0
-                            + theta_sq * (-1.0 / 46_080.0 + theta_sq / 10_321_920.0))),
+                        * (1.0 / 384.0 + theta_sq * (-1.0 / 46_080.0 + theta_sq / 10_321_920.0))),
         )
     } else {
         let (s, c) = (0.5 * theta).sin_cos();

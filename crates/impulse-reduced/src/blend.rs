@@ -2,13 +2,13 @@
 //!
 //! - **Weights** (eq. 25): `α_i ∝ (Σ_e ‖ξ_e − ξ_e⁽ⁱ⁾‖)^(−p)`, p = 2, with ξ the end-effector
 //!   displacement from rest (linear part over the bounding radius r, angular over π).
-//!   **[fix]** at a sample point the distance is zero: that model gets weight 1, so the blend
+//!   **\[fix\]** at a sample point the distance is zero: that model gets weight 1, so the blend
 //!   interpolates the samples exactly.
 //! - **Matrices** (Algorithm 3, §7.5): the *inverse* matrices (compliance, accelerability,
 //!   damping compliance) are blended — zero in a lower-rank model's inadmissible directions —
 //!   by their eigenstructure, then inverted by truncated SVD at the rank of the closest model.
-//!   **[fix]** the loop body accumulates `q̄ ← q̄ + α_i s_i q`, `λ̄ ← λ̄ + α_i λ`;
-//!   **[choose]** eigenvectors are matched *per eigenspace* without replacement: the closest
+//!   **\[fix\]** the loop body accumulates `q̄ ← q̄ + α_i s_i q`, `λ̄ ← λ̄ + α_i λ`;
+//!   **\[choose\]** eigenvectors are matched *per eigenspace* without replacement: the closest
 //!   model's eigenvalues are grouped into clusters (relative gap below [`CLUSTER_GAP`]); for
 //!   each cluster the same number of model i's eigenvectors with the largest projection on it
 //!   are taken and rotated onto it by orthogonal Procrustes, which for a simple eigenvalue is
@@ -16,8 +16,8 @@
 //!   rotation inside the eigenspace (a symmetric mechanism meets it at once). Each matched
 //!   vector brings its Rayleigh quotient as eigenvalue.
 //! - **Poses** (eqs. 26–28, Algorithm 4): `H̄ = H⁽¹⁾ exp(Σ_{j≥2} α_j log(H⁽¹⁾⁻¹ H⁽ʲ⁾))`, model 1
-//!   the closest. **[fix]** Algorithm 4 evaluates model 1 too (it is the base of eq. 28).
-//!   **[choose]** each model places the internal links for where the end effectors actually
+//!   the closest. **\[fix\]** Algorithm 4 evaluates model 1 too (it is the base of eq. 28).
+//!   **\[choose\]** each model places the internal links for where the end effectors actually
 //!   are: `ᵉw⁽ⁱ⁾ = K⁽ⁱ⁾ ξ_e⁽ⁱ⁾` with `ξ_e⁽ⁱ⁾ = log(H_e⁽ⁱ⁾⁻¹ H_e)`, so at a sample point the
 //!   blend reproduces that model's full static solution.
 
@@ -395,7 +395,7 @@ impl BlendedModel {
 impl BlendedModel {
     /// One step of Algorithm 5 (fixed base, no contact): weights at the current end-effector
     /// poses `ee`, blended matrices and references, `ξ = log(H̄_e⁻¹ H_e)`, backward Euler of eq. 24
-    /// with the system matrix of the [fix]ed eq. 23 (re-factored every step: it changes with
+    /// with the system matrix of the fixed eq. 23 (re-factored every step: it changes with
     /// the blend), `H_e ← H_e exp(h φ)`. `phi` and the stacked body wrenches `w` are per end
     /// effector in its body frame. Returns the blend used (its weights place the internal
     /// links through [`BlendedModel::internal_poses`]).

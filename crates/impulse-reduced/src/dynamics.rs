@@ -2,7 +2,7 @@
 //! system matrix factored once, frictional contact of the end effectors against fixed
 //! geometry by projected Gauss–Seidel, and a free base (§6.1).
 //!
-//! **[fix] eq. 23.** The paper prints `A = M − h²K − hD`, the force-derivative sign convention.
+//! **\[fix\] eq. 23.** The paper prints `A = M − h²K − hD`, the force-derivative sign convention.
 //! With eq. 8 as written (`M φ̇ + D φ + K ξ = w`), backward Euler is
 //! `(M + hD + h²K) φₙ₊₁ = M φₙ + h (w − b − K ξₙ)`, `ξₙ₊₁ = ξₙ + h φₙ₊₁` (eq. 24 for `b`); it is
 //! unconditionally stable (tested at h = 1 s). `A` is truncated-SVD inverted once (it has the

@@ -5,7 +5,7 @@
 //! - mechanisms of rigid links joined by compliant hinge, slider, ball and 6-DoF weld joints,
 //!   branching and merging (closed loops), fixed or free base, chosen end effectors; their
 //!   description in RON and a builder ([`MechanismDesc`]), validated into a [`Mechanism`];
-//! - the full nonlinear reference of the same mechanisms ([`reference`]): kinematics, exact
+//! - the full nonlinear reference of the same mechanisms ([`reference`](mod@reference)): kinematics, exact
 //!   Jacobians, linearised constrained statics (the Schur complement at the end effectors) and
 //!   nonlinear statics with loop closure;
 //! - the construction of the reduced model (§4–5): the chain/split/merge walk

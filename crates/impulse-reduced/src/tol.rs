@@ -1,5 +1,5 @@
 //! Every tolerance of the crate, with its unit and its reason. Algorithms take these as
-//! defaults of explicit parameters ([`crate::Tsvd`], [`crate::StaticOptions`]); none is a bare
+//! defaults of explicit parameters ([`crate::Tsvd`], [`crate::reference::StaticOptions`]); none is a bare
 //! literal inside an algorithm.
 
 /// Factor on the truncated-SVD threshold of FORK⁻¹S eq. 9, `ε = max(m, n)·‖A‖₂·ε_mach`
