@@ -28,11 +28,14 @@ use crate::Result;
 /// The `--case` name of this study.
 pub const CASE: &str = "forks";
 
-/// A Fig. 7 study: name, mechanism, load magnitudes, sample magnitudes, Newton tolerance.
-type Study = (&'static str, Mechanism, Vec<f64>, Vec<f64>, f64);
+/// A Fig. 7 study: name, mechanism, force direction, load magnitudes, sample magnitudes,
+/// Newton tolerance.
+type Study = (&'static str, Mechanism, DVec3, Vec<f64>, Vec<f64>, f64);
 
-/// Newton tolerance of the ladder's full solves (its round-off floor is near 1e-9).
-const LADDER_STATIC_TOLERANCE: f64 = 1e-8;
+/// Newton tolerance of the ladder's full solves: with 19 loops the finite-difference tangent
+/// and the truncated KKT solve stall between 1e-9 and 1e-8 of the force scale at the larger
+/// loads (beyond 150 N sideways they stall higher and the ladder study stops at 120 N).
+const LADDER_STATIC_TOLERANCE: f64 = 1e-7;
 
 /// Steps timed per measurement (after as many warm-up steps).
 const STEPS: usize = 2000;
@@ -205,12 +208,12 @@ pub fn run(out: &Path) -> Result<()> {
         "\nFORK⁻¹S Fig. 7: relative constraint error against relative end-effector displacement"
     );
     println!("(paper: single model 0.1–0.15 at displacement 1; blended zero at the samples)");
-    // The ladder's 19 loops put the Newton residual's round-off floor near 1e-9 at the larger
-    // loads: its full solves stop at 1e-8.
+    // The ladder's full solves stop at LADDER_STATIC_TOLERANCE (see there).
     let studies: [Study; 2] = [
         (
             "y",
             mechanism("y")?,
+            DVec3::X,
             (1..=16).map(|k| 40.0 * k as f64).collect(),
             vec![160.0, 320.0, 480.0, 640.0],
             impulse_reduced::tol::STATIC_RESIDUAL_REL,
@@ -218,12 +221,14 @@ pub fn run(out: &Path) -> Result<()> {
         (
             "ladder-36",
             mechanism("ladder-36")?,
-            (1..=12).map(|k| 25.0 * k as f64).collect(),
-            vec![75.0, 150.0, 225.0, 300.0],
+            // Out of the ladder's plane: in its plane the rung hinges lock every level.
+            DVec3::Y,
+            (1..=12).map(|k| 10.0 * k as f64).collect(),
+            vec![30.0, 60.0, 90.0, 120.0],
             LADDER_STATIC_TOLERANCE,
         ),
     ];
-    for (name, m, loads, samples, tolerance) in studies {
+    for (name, m, direction, loads, samples, tolerance) in studies {
         let statics = StaticOptions {
             load_steps: 4,
             tolerance,
@@ -232,7 +237,7 @@ pub fn run(out: &Path) -> Result<()> {
         let (rows, _) = fig7(
             &m,
             0,
-            DVec3::X,
+            direction,
             &loads,
             &samples,
             &ConstructOptions::default(),
