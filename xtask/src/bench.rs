@@ -126,6 +126,9 @@ pub fn run_bench(options: &Options) -> Result<()> {
         .clone()
         .unwrap_or_else(|| crate::workspace_root().join("target").join("bench"));
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    if options.case.as_deref() == Some(crate::forks::CASE) {
+        return crate::forks::run(&out);
+    }
     let stacks_only = options.case.as_deref() == Some(STACKS_CASE);
     let checks: Vec<SceneCheck> = scene_checks()
         .into_iter()

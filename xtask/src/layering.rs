@@ -403,7 +403,7 @@ Intro | with a pipe.
         assert_eq!(find("impulse-cli"), Some((5, Status::Built)));
         assert_eq!(find("xtask"), Some((5, Status::Built)));
         assert_eq!(find("impulse-broadphase"), Some((1, Status::Built)));
-        assert_eq!(find("impulse-reduced"), Some((3, Status::Planned)));
+        assert_eq!(find("impulse-reduced"), Some((3, Status::Built)));
     }
 
     #[test]

@@ -19,6 +19,7 @@
 mod bench;
 mod cases;
 mod ci;
+mod forks;
 mod layering;
 mod stacks;
 mod validate;
@@ -43,7 +44,8 @@ commands:
                                       in a release build; prints slowdown next to thesis Table 7.1
                                       and the error; writes bench.csv and one SVG per scene to DIR
                                       (default target/bench); then the stack study of 1–8 blocks
-                                      (stacks.csv; alone with --case stacks)
+                                      (stacks.csv; alone with --case stacks); --case forks
+                                      runs the FORK⁻¹S study alone (Tables 1-2, Fig. 7)
   layering                            check crate dependencies against the layer table of
                                       docs/architecture.md
   help                                print this message

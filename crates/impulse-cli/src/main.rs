@@ -13,9 +13,12 @@
 //! - `impulse dynamics <model.urdf> [--q … --qd … --tau …] [--gravity gx,gy,gz]`: forward
 //!   dynamics `{"qdd": [...]}` of a URDF multibody (thesis chapter 4); `--mass-matrix` prints
 //!   `{"M": [[...]]}`, `--inverse --qdd …` prints `{"tau": [...]}`, `--joints` the joint order.
+//! - `impulse reduce <mechanism.ron> [--load LINK:fx,fy,fz] [--static] [--out …] [--plot DIR]`:
+//!   a FORK⁻¹S reduced model under a load (static, or simulated).
 #![forbid(unsafe_code)]
 
 mod dynamics;
+mod reduce;
 mod run;
 
 use std::io::Write as _;
@@ -82,6 +85,10 @@ enum Command {
     /// accelerations `{"qdd": [...]}` for `--q`, `--qd`, `--tau` (each defaults to zeros).
     /// Passive joint damping and friction from `<dynamics>` are not applied.
     Dynamics(dynamics::DynamicsArgs),
+    /// FORK⁻¹S reduced model of a Mechanism(...) file under constant end-effector loads: the
+    /// static response against the full nonlinear statics (--static), or a simulation writing
+    /// link trajectories (the columns of `impulse run`) and the per-step error estimate.
+    Reduce(reduce::ReduceArgs),
 }
 
 fn massprops(mesh: &Path, density: Option<f64>, mass: Option<f64>) -> Result<String, String> {
@@ -169,6 +176,7 @@ fn main() -> ExitCode {
             mass,
         } => massprops(mesh, *density, *mass),
         Command::Dynamics(args) => dynamics::run(args),
+        Command::Reduce(args) => reduce::run(args),
     };
     match result {
         Ok(text) => {

@@ -279,6 +279,20 @@ impl Mul<Pose> for Pose {
     }
 }
 
+/// Right Jacobian of SO(3) at the rotation vector `w` (rad):
+/// `exp(w + δ) ≈ exp(w)·exp(J_r(w)·δ)` to first order in δ, i.e. the body-frame angular
+/// displacement produced by a change δ of the rotation vector.
+///
+/// `J_r(w) = I − (1 − cos θ)/θ²·ŵ + (θ − sin θ)/θ³·ŵ²`, θ = |w| (the left Jacobian — the `V` of
+/// [`Pose::exp`] — at `−w`); the coefficients use the same Taylor series below
+/// [`SE3_SERIES_ANGLE`], so `J_r(0) = I` exactly.
+#[must_use]
+pub fn so3_right_jacobian(w: DVec3) -> DMat3 {
+    let (a, b) = v_coefficients(w.length_squared());
+    let wh = hat(w);
+    DMat3::IDENTITY - wh * a + wh * wh * b
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -685,5 +699,34 @@ mod tests {
         assert!(p.is_finite());
         assert!(!Pose::new(DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0), DVec3::X).is_finite());
         assert!(!Pose::from_translation(DVec3::NAN).is_finite());
+    }
+
+    /// `so3_right_jacobian` against central differences of `so3_exp`: the body-frame rotation
+    /// `log(exp(w)⁻¹·exp(w + h e_k)) / h` for each axis, with truncation O(h²) ≈ 1e-12.
+    #[test]
+    fn so3_right_jacobian_matches_finite_differences() {
+        const H: f64 = 1e-6;
+        const FD_TOL: f64 = 1e-8;
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(77);
+        let mut err: f64 = 0.0;
+        for i in 0..2000 {
+            let w = if i % 2 == 0 {
+                ball(&mut rng, 3.0)
+            } else {
+                ball(&mut rng, 1e-3)
+            };
+            let jr = so3_right_jacobian(w);
+            let q0 = so3_exp(w).conjugate();
+            for k in 0..3 {
+                let e = DVec3::AXES[k];
+                let plus = so3_log(q0 * so3_exp(w + e * H));
+                let minus = so3_log(q0 * so3_exp(w - e * H));
+                let fd = (plus - minus) / (2.0 * H);
+                err = err.max((fd - jr.col(k)).abs().max_element());
+            }
+        }
+        assert_eq!(so3_right_jacobian(DVec3::ZERO), DMat3::IDENTITY);
+        println!("so3_right_jacobian vs central differences: {err:e}");
+        assert!(err <= FD_TOL);
     }
 }

@@ -1,0 +1,318 @@
+//! `impulse reduce`: a FORK⁻¹S reduced model of a `Mechanism(...)` file, under a constant load:
+//! the static response against the full nonlinear statics (`--static`), or a simulation that
+//! writes end-effector and link trajectories with the columns of `impulse run`.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use impulse_geom::{DVec3, Pose, Twist};
+use impulse_reduced::reference::kinematics::link_poses;
+use impulse_reduced::reference::{Configuration, Load, StaticOptions, solve_statics};
+use impulse_reduced::{
+    ConstructOptions, Mechanism, MechanismDesc, Obstacle, ReducedModel, ReducedSim,
+};
+
+/// Options of `impulse reduce`.
+#[derive(clap::Args)]
+pub struct ReduceArgs {
+    /// The mechanism file (RON, `Mechanism(...)`); see fixtures/mechanisms/.
+    mechanism: PathBuf,
+    /// A constant world force (and torque) on an end effector: `LINK:fx,fy,fz[,tx,ty,tz]`
+    /// (N, N·m). Repeatable.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        value_name = "LINK:FX,FY,FZ[,TX,TY,TZ]"
+    )]
+    load: Vec<String>,
+    /// Print the static response of the reduced model and of the full nonlinear statics
+    /// instead of simulating.
+    #[arg(long = "static")]
+    statics: bool,
+    /// Simulated end time (s).
+    #[arg(long, default_value_t = 1.0)]
+    until: f64,
+    /// Time step (s).
+    #[arg(long, default_value_t = 1e-3)]
+    dt: f64,
+    /// A ground plane z = Z under the mechanism (friction 0.5).
+    #[arg(long, allow_hyphen_values = true)]
+    ground: Option<f64>,
+    /// Write the trajectory (one row per frame and link) to this .csv or .json file.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Write an SVG plot (error.svg: the per-step error estimate) into this directory.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+fn parse_loads(m: &Mechanism, specs: &[String]) -> Result<Vec<Load>, String> {
+    specs
+        .iter()
+        .map(|s| {
+            let (name, nums) = s
+                .split_once(':')
+                .ok_or_else(|| format!("--load {s:?}: expected LINK:fx,fy,fz[,tx,ty,tz]"))?;
+            let link = m
+                .link_index(name)
+                .ok_or_else(|| format!("--load {s:?}: no link {name:?}"))?;
+            let v: Vec<f64> = nums
+                .split(',')
+                .map(|x| {
+                    x.trim()
+                        .parse::<f64>()
+                        .map_err(|e| format!("--load {s:?}: {e}"))
+                })
+                .collect::<Result<_, _>>()?;
+            if !(v.len() == 3 || v.len() == 6) || v.iter().any(|x| !x.is_finite()) {
+                return Err(format!("--load {s:?}: give 3 or 6 finite numbers"));
+            }
+            let t = if v.len() == 6 {
+                DVec3::new(v[3], v[4], v[5])
+            } else {
+                DVec3::ZERO
+            };
+            Ok(Load {
+                link,
+                force: DVec3::new(v[0], v[1], v[2]),
+                torque: t,
+            })
+        })
+        .collect()
+}
+
+/// Runs the command; returns the text to print.
+pub fn run(args: &ReduceArgs) -> Result<String, String> {
+    let text = std::fs::read_to_string(&args.mechanism)
+        .map_err(|e| format!("{}: {e}", args.mechanism.display()))?;
+    let desc =
+        MechanismDesc::from_ron(&text).map_err(|e| format!("{}: {e}", args.mechanism.display()))?;
+    let m = desc
+        .build()
+        .map_err(|e| format!("{}: {e}", args.mechanism.display()))?;
+    let loads = parse_loads(&m, &args.load)?;
+    let t0 = Instant::now();
+    let model = ReducedModel::build(
+        &m,
+        &Configuration::rest(&m),
+        &[],
+        &ConstructOptions::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    let build_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let ne = model.end_effectors.len();
+    let mut w = vec![0.0; 6 * ne];
+    for l in &loads {
+        let i = model
+            .end_effectors
+            .iter()
+            .position(|&e| e == l.link)
+            .ok_or_else(|| {
+                format!(
+                    "--load: link {:?} is not an end effector",
+                    m.links[l.link].name
+                )
+            })?;
+        let b = l.body_wrench(&model.reference[i]).to_array();
+        for r in 0..6 {
+            w[6 * i + r] += b[r];
+        }
+    }
+    if args.statics {
+        let (ee, _) = model.static_twists(&w);
+        let sol = solve_statics(
+            &m,
+            &loads,
+            None,
+            &StaticOptions {
+                load_steps: 4,
+                ..Default::default()
+            },
+        )
+        .map_err(|e| e.to_string())?;
+        let full = link_poses(&m, &sol.config);
+        let r = m.bounding_radius();
+        let mut s = format!(
+            "{{\n  \"mechanism\": {:?},\n  \"build_ms\": {build_ms:.3},\n  \"end_effectors\": [\n",
+            m.name
+        );
+        for (i, &e) in model.end_effectors.iter().enumerate() {
+            let red = model.reference[i] * Pose::exp(&ee[i]);
+            let d = (full[e].inverse() * red).log();
+            let err =
+                ((d.v / r).length_squared() + (d.w / std::f64::consts::PI).length_squared()).sqrt();
+            let _ = writeln!(
+                s,
+                "    {{\"link\": {:?}, \"reduced\": {:?}, \"full\": {:?}, \"relative_error\": {err:.3e}}}{}",
+                m.links[e].name,
+                red.translation.to_array(),
+                full[e].translation.to_array(),
+                if i + 1 < ne { "," } else { "" }
+            );
+        }
+        s.push_str("  ]\n}");
+        return Ok(s);
+    }
+    simulate(args, &m, model, &w, build_ms)
+}
+
+fn simulate(
+    args: &ReduceArgs,
+    m: &Mechanism,
+    model: ReducedModel,
+    w: &[f64],
+    build_ms: f64,
+) -> Result<String, String> {
+    let mut sim = ReducedSim::new(m, model, args.dt).map_err(|e| e.to_string())?;
+    sim.external = w.to_vec();
+    if let Some(z) = args.ground {
+        sim.obstacles.push(Obstacle::Plane {
+            normal: DVec3::Z,
+            offset: z,
+        });
+    }
+    if !(args.until.is_finite() && args.until > 0.0) {
+        return Err(format!("--until {} is not positive", args.until));
+    }
+    let steps = (args.until / args.dt).ceil() as usize;
+    let every = (steps / 100).max(1);
+    let names: Vec<&str> = sim
+        .model
+        .end_effectors
+        .iter()
+        .chain(&sim.model.internal)
+        .map(|&l| m.links[l].name.as_str())
+        .collect();
+    let mut internal = vec![Pose::IDENTITY; sim.model.internal.len()];
+    let mut prev: Option<Vec<Pose>> = None;
+    let mut frames: Vec<(f64, Vec<(Pose, Twist)>)> = Vec::new();
+    let mut errors: Vec<(f64, f64)> = Vec::new();
+    let wall = Instant::now();
+    for k in 1..=steps {
+        sim.step();
+        if k % every == 0 || k == steps || k == every - 1 {
+            sim.internal_poses(&mut internal);
+            let poses: Vec<Pose> = (0..sim.model.end_effectors.len())
+                .map(|i| sim.end_effector_pose(i))
+                .chain(internal.iter().copied())
+                .collect();
+            if k % every == 0 || k == steps {
+                let t = k as f64 * args.dt;
+                let vel: Vec<Twist> = match &prev {
+                    Some(p) => p
+                        .iter()
+                        .zip(&poses)
+                        .map(|(a, b)| {
+                            // World velocity of the origin and angular velocity over the last step.
+                            let dw = crate::reduce::rotvec(a, b) / args.dt;
+                            Twist::new((b.translation - a.translation) / args.dt, dw)
+                        })
+                        .collect(),
+                    None => vec![Twist::ZERO; poses.len()],
+                };
+                errors.push((t, sim.constraint_error(m)));
+                frames.push((t, poses.iter().copied().zip(vel).collect()));
+                if steps >= 10_000 {
+                    eprint!("\rimpulse reduce: t = {t:.3} s of {:.3} s", args.until);
+                }
+            }
+            prev = Some(poses);
+        }
+    }
+    if steps >= 10_000 {
+        eprintln!();
+    }
+    let wall = wall.elapsed().as_secs_f64();
+    if let Some(path) = &args.out {
+        write_trajectory(path, &names, &frames)?;
+    }
+    if let Some(dir) = &args.plot {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let path = dir.join("error.svg");
+        std::fs::write(&path, plot_error(&errors))
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    let max_err = errors.iter().map(|e| e.1).fold(0.0, f64::max);
+    let ee = sim.end_effector_pose(0).translation.to_array();
+    Ok(format!(
+        "{{\n  \"mechanism\": {:?},\n  \"links\": {},\n  \"build_ms\": {build_ms:.3},\n  \"steps\": {steps},\n  \"wall_s\": {wall:.4},\n  \"us_per_step\": {:.3},\n  \"end_effector_0\": {ee:?},\n  \"max_constraint_error\": {max_err:.3e}\n}}",
+        m.name,
+        m.links.len(),
+        wall * 1e6 / steps as f64
+    ))
+}
+
+/// Rotation vector (world) taking `a`'s orientation to `b`'s.
+fn rotvec(a: &Pose, b: &Pose) -> DVec3 {
+    impulse_geom::se3::so3_log(b.rotation * a.rotation.conjugate())
+}
+
+fn write_trajectory(
+    path: &Path,
+    names: &[&str],
+    frames: &[(f64, Vec<(Pose, Twist)>)],
+) -> Result<(), String> {
+    let json = path.extension().is_some_and(|e| e == "json");
+    let mut s = String::new();
+    let nums = |p: &Pose, v: &Twist| -> [f64; 13] {
+        let (t, q) = (p.translation, p.rotation);
+        [
+            t.x, t.y, t.z, q.x, q.y, q.z, q.w, v.v.x, v.v.y, v.v.z, v.w.x, v.w.y, v.w.z,
+        ]
+    };
+    if json {
+        let _ = write!(s, "{{\"bodies\": {names:?},\n\"frames\": [\n");
+        for (k, (t, states)) in frames.iter().enumerate() {
+            let rows: Vec<String> = states
+                .iter()
+                .map(|(p, v)| format!("{:?}", nums(p, v)))
+                .collect();
+            let _ = write!(
+                s,
+                "{}{{\"t\": {t}, \"states\": [{}]}}",
+                if k > 0 { ",\n" } else { "" },
+                rows.join(", ")
+            );
+        }
+        s.push_str("\n]}\n");
+    } else {
+        s.push_str("time,body,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz\n");
+        for (t, states) in frames {
+            for (name, (p, v)) in names.iter().zip(states) {
+                let _ = write!(s, "{t},{name}");
+                for x in nums(p, v) {
+                    let _ = write!(s, ",{x}");
+                }
+                s.push('\n');
+            }
+        }
+    }
+    std::fs::write(path, s).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn plot_error(errors: &[(f64, f64)]) -> String {
+    let (w, h, m) = (560.0, 300.0, 50.0);
+    let tmax = errors.last().map_or(1.0, |e| e.0).max(1e-12);
+    let ymax = errors.iter().map(|e| e.1).fold(0.0, f64::max).max(1e-15);
+    let pts: Vec<String> = errors
+        .iter()
+        .map(|(t, e)| {
+            format!(
+                "{:.1},{:.1}",
+                m + (w - 2.0 * m) * t / tmax,
+                h - m - (h - 2.0 * m) * e / ymax
+            )
+        })
+        .collect();
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n<text x=\"{}\" y=\"20\" text-anchor=\"middle\">relative constraint error (per-step estimate) against time</text>\n<polyline fill=\"none\" stroke=\"#33c\" stroke-width=\"2\" points=\"{}\"/>\n<text x=\"{m}\" y=\"{}\">0 s</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{tmax:.3} s</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{ymax:.2e}</text>\n</svg>\n",
+        w / 2.0,
+        pts.join(" "),
+        h - m + 15.0,
+        w - m,
+        h - m + 15.0,
+        m - 4.0,
+        m + 10.0
+    )
+}

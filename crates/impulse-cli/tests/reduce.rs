@@ -1,0 +1,84 @@
+//! End-to-end tests of `impulse reduce` on the bundled mechanisms.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::impulse;
+
+fn mechanism(name: &str) -> String {
+    let p: PathBuf =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../fixtures/mechanisms/{name}"));
+    p.to_string_lossy().into_owned()
+}
+
+/// Under a small load the reduced static pose matches the full nonlinear one to second order:
+/// 1 N on the Y's tip (100 N gives ~9e-3) must be far below 1e-5.
+const SMALL_LOAD_ERROR: f64 = 1e-5;
+
+#[test]
+fn static_response_matches_full_model_under_a_small_load() {
+    let out = impulse(&[
+        "reduce",
+        &mechanism("y.ron"),
+        "--load",
+        "a3:1,0,0",
+        "--static",
+    ]);
+    assert!(out.ok, "{}", out.stderr);
+    let json = out.json.expect("JSON output");
+    for e in json["end_effectors"].as_array().unwrap() {
+        let err = e["relative_error"].as_f64().unwrap();
+        assert!(err < SMALL_LOAD_ERROR, "{e}");
+    }
+}
+
+#[test]
+fn simulation_writes_a_trajectory_with_the_run_columns() {
+    let dir = std::env::temp_dir().join(format!("impulse-reduce-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("arm.csv");
+    let out = impulse(&[
+        "reduce",
+        &mechanism("robot-arm-20.ron"),
+        "--load",
+        "a19:0,5,0",
+        "--until",
+        "0.2",
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(out.ok, "{}", out.stderr);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("time,body,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz")
+    );
+    // 100 frames × 20 links (the end effector and 19 internal links).
+    assert_eq!(lines.count(), 100 * 20);
+    let json = out.json.unwrap();
+    assert_eq!(json["steps"].as_u64(), Some(200));
+}
+
+#[test]
+fn bad_input_names_the_problem() {
+    let out = impulse(&["reduce", &mechanism("y.ron"), "--load", "t0:1,0,0"]);
+    assert!(
+        !out.ok && out.stderr.contains("\"t0\" is not an end effector"),
+        "{}",
+        out.stderr
+    );
+    let bad = std::env::temp_dir().join(format!("impulse-reduce-bad-{}.ron", std::process::id()));
+    std::fs::write(
+        &bad,
+        "Mechanism(links: [Link(name: \"a\")], joints: [], end_effectors: [\"a\"])",
+    )
+    .unwrap();
+    let out = impulse(&["reduce", bad.to_str().unwrap()]);
+    assert!(
+        !out.ok && out.stderr.contains("end effector `a`"),
+        "{}",
+        out.stderr
+    );
+}

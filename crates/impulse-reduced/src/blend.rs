@@ -1,0 +1,493 @@
+//! Blending several FORK⁻¹S models built at different linearisation points (§7).
+//!
+//! - **Weights** (eq. 25): `α_i ∝ (Σ_e ‖ξ_e − ξ_e⁽ⁱ⁾‖)^(−p)`, p = 2, with ξ the end-effector
+//!   displacement from rest (linear part over the bounding radius r, angular over π).
+//!   **\[fix\]** at a sample point the distance is zero: that model gets weight 1, so the blend
+//!   interpolates the samples exactly.
+//! - **Matrices** (Algorithm 3, §7.5): the *inverse* matrices (compliance, accelerability,
+//!   damping compliance) are blended — zero in a lower-rank model's inadmissible directions —
+//!   by their eigenstructure, then inverted by truncated SVD at the rank of the closest model.
+//!   **\[fix\]** the loop body accumulates `q̄ ← q̄ + α_i s_i q`, `λ̄ ← λ̄ + α_i λ`;
+//!   **\[choose\]** eigenvectors are matched *per eigenspace* without replacement: the closest
+//!   model's eigenvalues are grouped into clusters (relative gap below [`CLUSTER_GAP`]); for
+//!   each cluster the same number of model i's eigenvectors with the largest projection on it
+//!   are taken and rotated onto it by orthogonal Procrustes, which for a simple eigenvalue is
+//!   the sign alignment `s_i = sign(q · Q_j⁽¹⁾)` and for a repeated one removes the arbitrary
+//!   rotation inside the eigenspace (a symmetric mechanism meets it at once). Each matched
+//!   vector brings its Rayleigh quotient as eigenvalue.
+//! - **Poses** (eqs. 26–28, Algorithm 4): `H̄ = H⁽¹⁾ exp(Σ_{j≥2} α_j log(H⁽¹⁾⁻¹ H⁽ʲ⁾))`, model 1
+//!   the closest. **\[fix\]** Algorithm 4 evaluates model 1 too (it is the base of eq. 28).
+//!   **\[choose\]** each model places the internal links for where the end effectors actually
+//!   are: `ᵉw⁽ⁱ⁾ = K⁽ⁱ⁾ ξ_e⁽ⁱ⁾` with `ξ_e⁽ⁱ⁾ = log(H_e⁽ⁱ⁾⁻¹ H_e)`, so at a sample point the
+//!   blend reproduces that model's full static solution.
+
+use faer::{Mat, Side};
+use impulse_geom::{Pose, Twist};
+
+use crate::construct::ReducedModel;
+use crate::error::Error;
+use crate::internal::link_twist;
+use crate::linalg::{Tsvd, pinv_rank};
+use crate::tol;
+
+/// Exponent p of the Shepard weights (eq. 25; the paper uses 2).
+pub const SHEPARD_POWER: f64 = 2.0;
+
+/// Eigenvalues of the closest model closer than this (relative to the largest) form one
+/// eigenspace in Algorithm 3 (dimensionless). Eigenvalues of the bundled mechanisms' 6×6 blocks
+/// that are equal by symmetry agree to ~1e-12; distinct ones differ by percents.
+pub const CLUSTER_GAP: f64 = 1e-6;
+
+/// A model's precomputed eigen-decomposition (Algorithm 3: "pre-computed").
+#[derive(Clone, Debug)]
+pub struct Eigen {
+    /// Eigenvalues, descending.
+    pub values: Vec<f64>,
+    /// Eigenvectors as columns, in the same order.
+    pub vectors: Mat<f64>,
+}
+
+impl Eigen {
+    /// Decomposes the symmetric `a`.
+    ///
+    /// # Errors
+    /// [`Error::LinearAlgebra`] if the solver fails.
+    pub fn new(a: &Mat<f64>) -> Result<Self, Error> {
+        let evd = a
+            .self_adjoint_eigen(Side::Lower)
+            .map_err(|e| Error::LinearAlgebra(format!("eigen: {e:?}")))?;
+        let (s, u) = (evd.S(), evd.U());
+        let n = a.nrows();
+        let mut idx: Vec<usize> = (0..n).collect();
+        idx.sort_by(|&i, &j| s[j].total_cmp(&s[i]));
+        Ok(Eigen {
+            values: idx.iter().map(|&i| s[i]).collect(),
+            vectors: Mat::from_fn(n, n, |r, c| u[(r, idx[c])]),
+        })
+    }
+}
+
+/// Shepard weights (eq. 25) from per-model distances with exponent `power` (the paper's p);
+/// a zero distance takes all the weight.
+#[must_use]
+pub fn shepard_weights(distances: &[f64], power: f64) -> Vec<f64> {
+    if let Some(i) = distances.iter().position(|&d| d <= 0.0) {
+        let mut w = vec![0.0; distances.len()];
+        w[i] = 1.0;
+        return w;
+    }
+    let raw: Vec<f64> = distances.iter().map(|d| d.powf(-power)).collect();
+    let s: f64 = raw.iter().sum();
+    raw.iter().map(|x| x / s).collect()
+}
+
+/// Scaled size of a displacement twist: `‖(v/r, ω/π)‖` (§7.1, §8.2).
+#[must_use]
+pub fn scaled_norm(t: &Twist, r: f64) -> f64 {
+    ((t.v / r).length_squared() + (t.w / core::f64::consts::PI).length_squared()).sqrt()
+}
+
+/// Algorithm 3 (fixed; see the module doc): blends symmetric matrices from their
+/// decompositions with weights `alpha`, keeping the rank `rank` of the closest model
+/// (largest weight).
+#[must_use]
+pub fn blend_rank1(eigs: &[&Eigen], mats: &[&Mat<f64>], alpha: &[f64], rank: usize) -> Mat<f64> {
+    let k = eigs.len();
+    let closest = (0..k)
+        .max_by(|&a, &b| alpha[a].total_cmp(&alpha[b]))
+        .unwrap_or(0);
+    let r0 = eigs[closest];
+    let n = r0.vectors.nrows();
+    let mut out = Mat::<f64>::zeros(n, n);
+    // Clusters of (nearly) equal eigenvalues of the closest model.
+    let scale = r0
+        .values
+        .first()
+        .map_or(0.0, |v| v.abs())
+        .max(f64::MIN_POSITIVE);
+    let mut clusters: Vec<(usize, usize)> = Vec::new();
+    let mut j = 0;
+    while j < rank {
+        let mut e = j + 1;
+        while e < rank && (r0.values[e] - r0.values[j]).abs() <= CLUSTER_GAP * scale {
+            e += 1;
+        }
+        clusters.push((j, e));
+        j = e;
+    }
+    // Per model, which of its eigenvectors are taken (matching without replacement).
+    let mut used: Vec<Vec<bool>> = (0..k).map(|_| vec![false; n]).collect();
+    for &(j0, j1) in &clusters {
+        let dim = j1 - j0;
+        let qc = Mat::from_fn(n, dim, |r, c| r0.vectors[(r, j0 + c)]);
+        let mut qbar = Mat::<f64>::zeros(n, dim);
+        let mut lbar = vec![0.0; dim];
+        for i in 0..k {
+            let (q, ev) = if i == closest {
+                (
+                    qc.clone(),
+                    (j0..j1).map(|c| r0.values[c]).collect::<Vec<_>>(),
+                )
+            } else {
+                let e = eigs[i];
+                // Take the `dim` unused columns with the largest projection on span(qc).
+                let mut cand: Vec<(f64, usize)> = (0..n)
+                    .filter(|&c| !used[i][c])
+                    .map(|c| {
+                        let p: f64 = (0..dim)
+                            .map(|m| {
+                                (0..n)
+                                    .map(|r| qc[(r, m)] * e.vectors[(r, c)])
+                                    .sum::<f64>()
+                                    .powi(2)
+                            })
+                            .sum();
+                        (p, c)
+                    })
+                    .collect();
+                cand.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+                let cols: Vec<usize> = cand.iter().take(dim).map(|x| x.1).collect();
+                for &c in &cols {
+                    used[i][c] = true;
+                }
+                let qi = Mat::from_fn(n, dim, |r, c| e.vectors[(r, cols[c])]);
+                // Orthogonal Procrustes: R = U Vᵀ from qiᵀ qc = U Σ Vᵀ; qi R ≈ qc.
+                let m = qi.transpose() * &qc;
+                let rot = match m.svd() {
+                    Ok(svd) => svd.U() * svd.V().transpose(),
+                    Err(_) => Mat::identity(dim, dim),
+                };
+                let aligned = &qi * rot;
+                // Rayleigh quotients of model i's matrix on the aligned vectors.
+                let ev: Vec<f64> = (0..dim)
+                    .map(|c| {
+                        let v = Mat::from_fn(n, 1, |r, _| aligned[(r, c)]);
+                        (v.transpose() * mats[i] * &v)[(0, 0)]
+                    })
+                    .collect();
+                (aligned, ev)
+            };
+            for c in 0..dim {
+                lbar[c] += alpha[i] * ev[c];
+                for r in 0..n {
+                    qbar[(r, c)] += alpha[i] * q[(r, c)];
+                }
+            }
+        }
+        for c in 0..dim {
+            let norm = (0..n).map(|r| qbar[(r, c)].powi(2)).sum::<f64>().sqrt();
+            if norm == 0.0 {
+                continue;
+            }
+            for a in 0..n {
+                for b in 0..n {
+                    out[(a, b)] += lbar[c] * qbar[(a, c)] * qbar[(b, c)] / (norm * norm);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// eq. 28: `H⁽ᶜ⁾ exp(Σ_{j≠c} α_j log(H⁽ᶜ⁾⁻¹ H⁽ʲ⁾))`, c the largest weight.
+#[must_use]
+pub fn blend_poses(poses: &[Pose], alpha: &[f64]) -> Pose {
+    let c = (0..poses.len())
+        .max_by(|&a, &b| alpha[a].total_cmp(&alpha[b]))
+        .unwrap_or(0);
+    let base = poses[c];
+    let inv = base.inverse();
+    let sum = poses
+        .iter()
+        .zip(alpha)
+        .enumerate()
+        .filter(|(j, _)| *j != c)
+        .fold(Twist::ZERO, |acc, (_, (p, a))| acc + (inv * *p).log() * *a);
+    base * Pose::exp(&sum)
+}
+
+/// A set of models of one mechanism, with their decompositions (Algorithm 5's data).
+pub struct BlendedModel {
+    /// The models; `models[0]` is usually the rest model.
+    pub models: Vec<ReducedModel>,
+    /// Per model: decompositions of compliance, accelerability, damping compliance.
+    eig: Vec<[Eigen; 3]>,
+    /// Per model: the damping compliance `D⁺`.
+    dcomp: Vec<Mat<f64>>,
+    /// Rest poses of the end effectors (the zero of ξ in eq. 25).
+    rest: Vec<Pose>,
+    /// Bounding radius r (eq. 25).
+    pub radius: f64,
+    /// Shepard exponent p (eq. 25; [`SHEPARD_POWER`] unless changed).
+    pub power: f64,
+}
+
+/// The blended end-effector system at one state (Algorithm 5's per-step quantities).
+pub struct Blend {
+    /// Weights α (eq. 25).
+    pub alpha: Vec<f64>,
+    /// Blended compliance C̄ (before inversion).
+    pub compliance: Mat<f64>,
+    /// Blended stiffness K̄, mass M̄, damping D̄.
+    pub stiffness: Mat<f64>,
+    /// Blended mass.
+    pub mass: Mat<f64>,
+    /// Blended damping.
+    pub damping: Mat<f64>,
+    /// Blended static wrench b̄ (stacked).
+    pub bias: Vec<f64>,
+    /// Blended end-effector reference poses H̄_e (eq. 28).
+    pub reference: Vec<Pose>,
+}
+
+impl BlendedModel {
+    /// Prepares `models` (same mechanism, same end effectors) for blending; `rest` are the end
+    /// effectors' rest poses and `radius` the mechanism's bounding radius.
+    ///
+    /// # Errors
+    /// [`Error::Argument`] for an empty set; [`Error::LinearAlgebra`] from the decompositions.
+    pub fn new(models: Vec<ReducedModel>, rest: Vec<Pose>, radius: f64) -> Result<Self, Error> {
+        if models.is_empty() {
+            return Err(Error::Argument(
+                "blending needs at least one model".to_owned(),
+            ));
+        }
+        let mut eig = Vec::new();
+        let mut dcomp = Vec::new();
+        for m in &models {
+            let dc = crate::linalg::pinv(m.damping.as_ref(), Tsvd::default())?.inverse;
+            eig.push([
+                Eigen::new(&m.compliance)?,
+                Eigen::new(&m.accelerability)?,
+                Eigen::new(&dc)?,
+            ]);
+            dcomp.push(dc);
+        }
+        Ok(BlendedModel {
+            models,
+            eig,
+            dcomp,
+            rest,
+            radius,
+            power: SHEPARD_POWER,
+        })
+    }
+
+    /// Weights (eq. 25) for end effectors at world poses `ee` (fixed base).
+    #[must_use]
+    pub fn weights(&self, ee: &[Pose]) -> Vec<f64> {
+        let d: Vec<f64> = self
+            .models
+            .iter()
+            .map(|m| {
+                ee.iter()
+                    .zip(&m.reference)
+                    .zip(&self.rest)
+                    .map(|((h, hi), r)| {
+                        let x = (r.inverse() * *h).log();
+                        let xi = (r.inverse() * *hi).log();
+                        scaled_norm(&(x - xi), self.radius)
+                    })
+                    .sum()
+            })
+            .collect();
+        shepard_weights(&d, self.power)
+    }
+
+    /// The blended system for end effectors at `ee` (Algorithm 5, before the step).
+    ///
+    /// # Errors
+    /// [`Error::Rank`] / [`Error::LinearAlgebra`] from the inversions.
+    pub fn blend(&self, ee: &[Pose]) -> Result<Blend, Error> {
+        let alpha = self.weights(ee);
+        let c = (0..alpha.len())
+            .max_by(|&a, &b| alpha[a].total_cmp(&alpha[b]))
+            .unwrap_or(0);
+        let rank = self.models[c].rank;
+        let blended = |which: usize, mats: Vec<&Mat<f64>>| -> Mat<f64> {
+            let eigs: Vec<&Eigen> = self.eig.iter().map(|e| &e[which]).collect();
+            blend_rank1(&eigs, &mats, &alpha, rank)
+        };
+        let inv = |which: usize, mats: Vec<&Mat<f64>>, name: &str| -> Result<Mat<f64>, Error> {
+            let b = blended(which, mats);
+            Ok(pinv_rank(b.as_ref(), rank, Tsvd::default(), 0.0, tol::RANK_GAP, name)?.inverse)
+        };
+        let compliance = blended(0, self.models.iter().map(|m| &m.compliance).collect());
+        let stiffness = pinv_rank(
+            compliance.as_ref(),
+            rank,
+            Tsvd::default(),
+            0.0,
+            tol::RANK_GAP,
+            "blended compliance",
+        )?
+        .inverse;
+        let mass = inv(
+            1,
+            self.models.iter().map(|m| &m.accelerability).collect(),
+            "blended accelerability",
+        )?;
+        let damped = self
+            .models
+            .iter()
+            .any(|m| crate::linalg::max_abs(m.damping.as_ref()) > 0.0);
+        let damping = if damped {
+            inv(2, self.dcomp.iter().collect(), "blended damping")?
+        } else {
+            Mat::zeros(stiffness.nrows(), stiffness.ncols())
+        };
+        let n = stiffness.nrows();
+        let bias = (0..n)
+            .map(|r| {
+                self.models
+                    .iter()
+                    .zip(&alpha)
+                    .map(|(m, a)| a * m.bias[r])
+                    .sum()
+            })
+            .collect();
+        let reference = (0..ee.len())
+            .map(|e| {
+                let poses: Vec<Pose> = self.models.iter().map(|m| m.reference[e]).collect();
+                blend_poses(&poses, &alpha)
+            })
+            .collect();
+        Ok(Blend {
+            alpha,
+            compliance,
+            stiffness,
+            mass,
+            damping,
+            bias,
+            reference,
+        })
+    }
+
+    /// Algorithm 4 (fixed): internal-link world poses for end effectors at `ee` with weights
+    /// `alpha`; one pose per `models[0].internal`.
+    #[must_use]
+    pub fn internal_poses(&self, ee: &[Pose], alpha: &[f64]) -> Vec<Pose> {
+        let per_model: Vec<Vec<Pose>> = self
+            .models
+            .iter()
+            .map(|m| {
+                // ξ_e⁽ⁱ⁾ = log(H_e⁽ⁱ⁾⁻¹ H_e), w⁽ⁱ⁾ = K⁽ⁱ⁾ ξ⁽ⁱ⁾.
+                let xi: Vec<f64> = ee
+                    .iter()
+                    .zip(&m.reference)
+                    .flat_map(|(h, hi)| (hi.inverse() * *h).log().to_array())
+                    .collect();
+                let w = crate::internal::equivalent_wrenches(m, &xi);
+                (0..m.internal.len())
+                    .map(|k| m.internal_reference[k] * Pose::exp(&link_twist(m, k, &w)))
+                    .collect()
+            })
+            .collect();
+        (0..per_model[0].len())
+            .map(|k| {
+                let poses: Vec<Pose> = per_model.iter().map(|p| p[k]).collect();
+                blend_poses(&poses, alpha)
+            })
+            .collect()
+    }
+}
+
+impl BlendedModel {
+    /// One step of Algorithm 5 (fixed base, no contact): weights at the current end-effector
+    /// poses `ee`, blended matrices and references, `ξ = log(H̄_e⁻¹ H_e)`, backward Euler of eq. 24
+    /// with the system matrix of the fixed eq. 23 (re-factored every step: it changes with
+    /// the blend), `H_e ← H_e exp(h φ)`. `phi` and the stacked body wrenches `w` are per end
+    /// effector in its body frame. Returns the blend used (its weights place the internal
+    /// links through [`BlendedModel::internal_poses`]).
+    ///
+    /// # Errors
+    /// Errors of [`BlendedModel::blend`] and of the factorisation.
+    pub fn step(
+        &self,
+        ee: &mut [Pose],
+        phi: &mut [f64],
+        w: &[f64],
+        h: f64,
+    ) -> Result<Blend, Error> {
+        let b = self.blend(ee)?;
+        let n = phi.len();
+        let xi: Vec<f64> = ee
+            .iter()
+            .zip(&b.reference)
+            .flat_map(|(p, r)| (r.inverse() * *p).log().to_array())
+            .collect();
+        let a = &b.mass + &b.damping * h + &b.stiffness * (h * h);
+        let a_inv = crate::linalg::pinv(a.as_ref(), Tsvd::default())?.inverse;
+        let rhs: Vec<f64> = (0..n)
+            .map(|r| {
+                (0..n)
+                    .map(|c| b.mass[(r, c)] * phi[c] - h * b.stiffness[(r, c)] * xi[c])
+                    .sum::<f64>()
+                    + h * (w[r] - b.bias[r])
+            })
+            .collect();
+        for (r, p) in phi.iter_mut().enumerate() {
+            *p = (0..n).map(|c| a_inv[(r, c)] * rhs[c]).sum();
+        }
+        for (e, pose) in ee.iter_mut().enumerate() {
+            let t = Twist::from_array(core::array::from_fn(|k| phi[6 * e + k] * h));
+            *pose = *pose * Pose::exp(&t);
+        }
+        Ok(b)
+    }
+}
+
+/// Static equilibrium of a blended model (fixed base) under constant stacked world loads
+/// `force_torque` (per end effector: force then torque, world): the fixed point
+/// `H_e = H̄_e exp(C̄ (w(H_e) − b̄))` of Algorithm 5 at rest, by successive substitution from
+/// `start`. Returns the end-effector poses and the weights there.
+///
+/// # Errors
+/// [`Error::NoConvergence`] when the iteration does not settle; errors of [`BlendedModel::blend`].
+pub fn blended_statics(
+    set: &BlendedModel,
+    force_torque: &[[f64; 6]],
+    start: &[Pose],
+) -> Result<(Vec<Pose>, Vec<f64>), Error> {
+    let mut ee = start.to_vec();
+    for it in 0..tol::BLEND_STATIC_ITERATIONS {
+        let b = set.blend(&ee)?;
+        let w: Vec<f64> = ee
+            .iter()
+            .zip(force_torque)
+            .flat_map(|(p, ft)| {
+                let f = p.inverse_transform_vector(glam::DVec3::new(ft[0], ft[1], ft[2]));
+                let t = p.inverse_transform_vector(glam::DVec3::new(ft[3], ft[4], ft[5]));
+                [f.x, f.y, f.z, t.x, t.y, t.z]
+            })
+            .collect();
+        let n = w.len();
+        let mut change = 0.0_f64;
+        let next: Vec<Pose> = (0..ee.len())
+            .map(|e| {
+                let xi = Twist::from_array(core::array::from_fn(|r| {
+                    (0..n)
+                        .map(|c| b.compliance[(6 * e + r, c)] * (w[c] - b.bias[c]))
+                        .sum()
+                }));
+                let p = b.reference[e] * Pose::exp(&xi);
+                change = change.max(scaled_norm(&(ee[e].inverse() * p).log(), set.radius));
+                p
+            })
+            .collect();
+        ee = next;
+        if change <= tol::BLEND_STATIC_TOLERANCE {
+            let alpha = set.weights(&ee);
+            return Ok((ee, alpha));
+        }
+        let _ = it;
+    }
+    Err(Error::NoConvergence {
+        residual: f64::NAN,
+        iterations: tol::BLEND_STATIC_ITERATIONS,
+    })
+}
+
+#[cfg(test)]
+#[path = "blend_tests.rs"]
+mod tests;

@@ -1,0 +1,204 @@
+//! Blending: exact at samples, eigenstructure kept, repeated eigenvalues, Fig. 7.
+
+use faer::Mat;
+use glam::DVec3;
+
+use super::*;
+use crate::construct::ConstructOptions;
+use crate::study::fig7;
+use crate::testutil::{max_abs, rng};
+
+/// Interpolation at a sample point and blends of equal matrices are exact to rounding.
+const EXACT_REL: f64 = 1e-12;
+
+fn random_spd(rng: &mut rand::rngs::Xoshiro256PlusPlus, n: usize, rank: usize) -> Mat<f64> {
+    use rand::RngExt;
+    let a = Mat::from_fn(n, rank, |_, _| rng.random_range(-1.0..1.0));
+    &a * a.transpose()
+}
+
+#[test]
+fn shepard_weights_interpolate_and_sum_to_one() {
+    assert_eq!(shepard_weights(&[0.3, 0.0, 2.0], 2.0), vec![0.0, 1.0, 0.0]);
+    let w = shepard_weights(&[1.0, 2.0], 2.0);
+    assert!((w[0] - 0.8).abs() < 1e-15 && (w[1] - 0.2).abs() < 1e-15);
+    assert!((shepard_weights(&[0.1, 0.7, 3.0], 2.0).iter().sum::<f64>() - 1.0).abs() < 1e-15);
+}
+
+#[test]
+fn rank1_blend_is_exact_at_samples_and_for_equal_matrices() {
+    let mut rng = rng(5);
+    for case in 0..100 {
+        let n = 6 * (1 + case % 2);
+        let rank = 1 + case % n;
+        let mats: Vec<Mat<f64>> = (0..3).map(|_| random_spd(&mut rng, n, rank)).collect();
+        let eigs: Vec<Eigen> = mats.iter().map(|m| Eigen::new(m).unwrap()).collect();
+        let er: Vec<&Eigen> = eigs.iter().collect();
+        let mr: Vec<&Mat<f64>> = mats.iter().collect();
+        for i in 0..3 {
+            let mut alpha = vec![0.0; 3];
+            alpha[i] = 1.0;
+            let b = blend_rank1(&er, &mr, &alpha, rank);
+            let err = max_abs(&(&b - &mats[i])) / max_abs(&mats[i]);
+            assert!(err <= EXACT_REL, "case {case}, sample {i}: {err:e}");
+        }
+        // The same matrix three times: any weights give it back.
+        let same: Vec<&Mat<f64>> = vec![&mats[0]; 3];
+        let se: Vec<&Eigen> = vec![&eigs[0]; 3];
+        let b = blend_rank1(&se, &same, &[0.2, 0.5, 0.3], rank);
+        assert!(max_abs(&(&b - &mats[0])) <= EXACT_REL * max_abs(&mats[0]));
+    }
+}
+
+#[test]
+fn rank1_blend_handles_repeated_eigenvalues() {
+    // diag(3, 1, 1, 1, 2, 2) decomposed in two bases of its repeated eigenspaces: model 2's
+    // eigenvectors for the triple eigenvalue are a generic 3-D rotation of model 1's. Matching
+    // single vectors pairs unrelated directions; matching eigenspaces returns the matrix.
+    let n = 6;
+    let vals = [3.0, 2.0, 2.0, 1.0, 1.0, 1.0];
+    let x = Mat::from_fn(n, n, |i, j| {
+        if i == j {
+            [3.0, 1.0, 1.0, 1.0, 2.0, 2.0][i]
+        } else {
+            0.0
+        }
+    });
+    let e1 = Eigen::new(&x).unwrap();
+    let rot = glam::DMat3::from_axis_angle(DVec3::new(0.3, 0.8, -0.5).normalize(), 1.2);
+    // Model 2: the same eigenvalues; vectors for "1" rotated inside span(e1, e2, e3).
+    let mut v2 = e1.vectors.clone();
+    for (c, col) in (3..6).enumerate() {
+        let _ = c;
+        for r in 0..n {
+            v2[(r, col)] = (0..3)
+                .map(|k| e1.vectors[(r, 3 + k)] * rot.col(col - 3)[k])
+                .sum();
+        }
+    }
+    let e2 = Eigen {
+        values: vals.to_vec(),
+        vectors: v2,
+    };
+    for alpha in [[0.5, 0.5], [0.3, 0.7], [0.9, 0.1]] {
+        let b = blend_rank1(&[&e1, &e2], &[&x, &x], &alpha, n);
+        let err = max_abs(&(&b - &x));
+        assert!(err <= EXACT_REL * 10.0, "{alpha:?}: {err:e}");
+    }
+    // Guard that the test can fail: vector-by-vector matching (most similar by |dot|, sign
+    // aligned, without replacement) misses the matrix.
+    let naive = {
+        let mut out = Mat::<f64>::zeros(n, n);
+        let mut used = [false; 6];
+        for j in 0..n {
+            let dot = |c: usize| {
+                (0..n)
+                    .map(|r| e1.vectors[(r, j)] * e2.vectors[(r, c)])
+                    .sum::<f64>()
+            };
+            let c = (0..n)
+                .filter(|&c| !used[c])
+                .max_by(|&a, &b| dot(a).abs().total_cmp(&dot(b).abs()))
+                .unwrap();
+            used[c] = true;
+            let s = dot(c).signum();
+            let q = Mat::from_fn(n, 1, |r, _| {
+                0.5 * e1.vectors[(r, j)] + 0.5 * s * e2.vectors[(r, c)]
+            });
+            let norm = (q.transpose() * &q)[(0, 0)];
+            out += &q * q.transpose() * (0.5 * (e1.values[j] + e2.values[c]) / norm);
+        }
+        out
+    };
+    let naive_err = max_abs(&(&naive - &x));
+    println!("repeated eigenvalues: vector-by-vector matching misses by {naive_err:.3}");
+    assert!(naive_err > 1e-3);
+}
+
+#[test]
+fn rank1_blend_keeps_eigenvalues_of_rotated_matrices() {
+    // R(θ) diag(4, 1) R(θ)ᵀ at θ = 0 and π/5 (padded to 6×6): the blend at ½ is the same
+    // ellipse turned by π/10, not the rounder element-wise average. (Beyond π/4 the "most
+    // similar" eigenvector is the other one: models must be close, as the paper says.)
+    let make = |theta: f64| {
+        let (c, s) = (theta.cos(), theta.sin());
+        let mut m = Mat::<f64>::identity(6, 6) * 0.5;
+        m[(0, 0)] = 4.0 * c * c + s * s;
+        m[(1, 1)] = 4.0 * s * s + c * c;
+        m[(0, 1)] = 3.0 * c * s;
+        m[(1, 0)] = 3.0 * c * s;
+        m
+    };
+    let (a, b) = (make(0.0), make(core::f64::consts::PI / 5.0));
+    let (ea, eb) = (Eigen::new(&a).unwrap(), Eigen::new(&b).unwrap());
+    let blend = blend_rank1(&[&ea, &eb], &[&a, &b], &[0.5, 0.5], 6);
+    let expect = make(core::f64::consts::PI / 10.0);
+    let err = max_abs(&(&blend - &expect));
+    let elementwise = max_abs(&((&a + &b) * 0.5 - &expect));
+    println!("rotated blend vs R(π/10): {err:e} (element-wise average: {elementwise:.3})");
+    assert!(err <= EXACT_REL * 10.0);
+    assert!(elementwise > 0.05);
+}
+
+#[test]
+fn fig7_y_blended_is_exact_at_samples_and_beats_single() {
+    let m = crate::scenes::y_shape(4).build().unwrap();
+    let dir = DVec3::new(1.0, 0.0, 0.0);
+    let loads: Vec<f64> = (1..=12).map(|k| 40.0 * k as f64).collect();
+    let samples = [120.0, 240.0, 360.0, 480.0];
+    let (rows, _) = fig7(
+        &m,
+        0,
+        dir,
+        &loads,
+        &samples,
+        &ConstructOptions::default(),
+        &crate::reference::StaticOptions {
+            load_steps: 4,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    for r in &rows {
+        println!(
+            "load {:6.1} N: displacement {:.3}, single {:.3e}, blended {:.3e}, EE pose error single {:.2e} blended {:.2e}",
+            r.load, r.displacement, r.single, r.blended, r.single_pose, r.blended_pose
+        );
+    }
+    for r in rows.iter().filter(|r| samples.contains(&r.load)) {
+        assert!(r.blended <= 1e-9, "sample {}: {}", r.load, r.blended);
+    }
+    let single: f64 = rows.iter().map(|r| r.single).sum();
+    let blended: f64 = rows.iter().map(|r| r.blended).sum();
+    println!(
+        "mean constraint error: single {:.3e}, blended {:.3e}",
+        single / rows.len() as f64,
+        blended / rows.len() as f64
+    );
+    assert!(blended <= single / 3.0);
+}
+
+#[test]
+fn blended_step_with_one_model_follows_the_single_model() {
+    // One model: Algorithm 5 is the single-model step (poses by exp instead of additive ξ,
+    // which agree to second order in the step's motion).
+    let m = crate::scenes::robot_arm(6).build().unwrap();
+    let q = crate::reference::Configuration::rest(&m);
+    let model = ReducedModel::build(&m, &q, &[], &ConstructOptions::default()).unwrap();
+    let rest: Vec<Pose> = model.reference.clone();
+    let set = BlendedModel::new(vec![model.clone()], rest.clone(), m.bounding_radius()).unwrap();
+    let mut sim = crate::dynamics::ReducedSim::new(&m, model, 1e-3).unwrap();
+    sim.gravity = DVec3::ZERO;
+    sim.external[0] = 2.0;
+    let (mut ee, mut phi) = (rest.clone(), vec![0.0; 6]);
+    let w = sim.external.clone();
+    for _ in 0..200 {
+        sim.step();
+        set.step(&mut ee, &mut phi, &w, 1e-3).unwrap();
+    }
+    let d = (sim.end_effector_pose(0).inverse() * ee[0]).log();
+    let size = (rest[0].inverse() * ee[0]).log();
+    let rel = scaled_norm(&d, 1.0) / scaled_norm(&size, 1.0);
+    println!("blended (1 model) vs single step after 200 steps: {rel:.2e} relative");
+    assert!(rel < 1e-3);
+}

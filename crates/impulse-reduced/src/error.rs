@@ -1,0 +1,131 @@
+//! The error type of `impulse-reduced`: every failure names what is wrong and where (the link,
+//! joint or end effector by its name).
+
+use thiserror::Error;
+
+/// Everything that can go wrong while reading, validating or reducing a mechanism.
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum Error {
+    /// The RON text could not be parsed into a `Mechanism(...)`.
+    #[error("mechanism file: {0}")]
+    Parse(String),
+    /// Two links share a name.
+    #[error("link `{0}` is declared twice")]
+    DuplicateLink(String),
+    /// Two joints share a name.
+    #[error("joint `{0}` is declared twice")]
+    DuplicateJoint(String),
+    /// A joint names a link that does not exist.
+    #[error("joint `{joint}`: unknown {side} link `{link}`")]
+    UnknownLink {
+        /// The joint.
+        joint: String,
+        /// "parent" or "child".
+        side: &'static str,
+        /// The missing name.
+        link: String,
+    },
+    /// A joint connects a link to itself.
+    #[error("joint `{0}` connects a link to itself")]
+    SelfJoint(String),
+    /// A number is NaN or infinite.
+    #[error("{owner}: `{field}` is not finite")]
+    NonFinite {
+        /// "link `a`", "joint `j`", "load" …
+        owner: String,
+        /// The field.
+        field: &'static str,
+    },
+    /// A value is out of its range (negative mass, zero axis, non-positive radius …).
+    #[error("{owner}: `{field}` {reason}")]
+    OutOfRange {
+        /// "link `a`", "joint `j`" …
+        owner: String,
+        /// The field.
+        field: &'static str,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A joint declares a free direction with zero or negative compliance.
+    #[error(
+        "joint `{joint}`: direction {direction} is declared free but its compliance is {value} \
+         (must be > 0; make the direction rigid by choosing another joint kind)"
+    )]
+    NonPositiveCompliance {
+        /// The joint.
+        joint: String,
+        /// Index of the free direction (0-based, in the joint's order).
+        direction: usize,
+        /// The offending compliance.
+        value: f64,
+    },
+    /// A per-direction list has the wrong length.
+    #[error(
+        "joint `{joint}`: `{field}` has {got} values, the joint has {expected} free directions (give 1 or {expected})"
+    )]
+    CountMismatch {
+        /// The joint.
+        joint: String,
+        /// The field.
+        field: &'static str,
+        /// The joint's number of free directions.
+        expected: usize,
+        /// The number given.
+        got: usize,
+    },
+    /// Damping is zero on some free directions and positive on others.
+    #[error(
+        "joint `{0}`: damping must be positive on every free direction of every joint, or zero everywhere"
+    )]
+    MixedDamping(String),
+    /// No link is without a parent, or more than one is.
+    #[error("the mechanism needs exactly one base (a link that is no joint's child); found {0}")]
+    Base(String),
+    /// A link cannot be reached from the base.
+    #[error("link `{0}` cannot be reached from the base")]
+    Unreachable(String),
+    /// The joint graph has a directed cycle: the walk from the base cannot order it.
+    #[error(
+        "unwalkable loop: joint `{0}` closes a directed cycle (orient the loop's joints away from the base)"
+    )]
+    Cycle(String),
+    /// An end effector is unknown, repeated, the base, or not a leaf of the walk.
+    #[error("end effector `{link}`: {reason}")]
+    EndEffector {
+        /// The link.
+        link: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The rank found by the truncated SVD disagrees with the rank expected from the joints.
+    #[error(
+        "rank check failed at {at}: truncated SVD gives rank {found}, the joints give {expected} \
+         (tolerance {tolerance:e}; adjust `Tsvd` or check the mechanism)"
+    )]
+    Rank {
+        /// Where (e.g. "end-effector compliance").
+        at: String,
+        /// Rank found.
+        found: usize,
+        /// Rank expected.
+        expected: usize,
+        /// The tolerance used.
+        tolerance: f64,
+    },
+    /// A dense factorisation failed (non-finite input).
+    #[error("linear algebra failed: {0}")]
+    LinearAlgebra(String),
+    /// The nonlinear static solver did not converge.
+    #[error(
+        "static solve did not converge: residual {residual:e} after {iterations} Newton iterations"
+    )]
+    NoConvergence {
+        /// Final residual norm.
+        residual: f64,
+        /// Iterations used.
+        iterations: usize,
+    },
+    /// An argument of a call is malformed (wrong length, unknown name, NaN).
+    #[error("{0}")]
+    Argument(String),
+}

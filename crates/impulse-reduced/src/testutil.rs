@@ -1,0 +1,179 @@
+//! Test helpers: random mechanisms (trees and loops) with random joint kinds, axes, offsets and
+//! compliances over six decades; block comparisons.
+
+use faer::Mat;
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+
+use crate::desc::{JointDesc, LinkDesc, MechanismDesc};
+
+/// A seeded generator.
+pub fn rng(seed: u64) -> Xoshiro256PlusPlus {
+    Xoshiro256PlusPlus::seed_from_u64(seed)
+}
+
+fn v3(rng: &mut Xoshiro256PlusPlus, s: f64) -> [f64; 3] {
+    [
+        rng.random_range(-s..s),
+        rng.random_range(-s..s),
+        rng.random_range(-s..s),
+    ]
+}
+
+fn unit(rng: &mut Xoshiro256PlusPlus) -> [f64; 3] {
+    loop {
+        let v = v3(rng, 1.0);
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if n > 0.1 && n <= 1.0 {
+            return [v[0] / n, v[1] / n, v[2] / n];
+        }
+    }
+}
+
+/// A random mechanism of `n` moving links (plus the base) and `loops` extra joints closing
+/// loops (closed by hinges or balls); at most `max_ee` end effectors, chosen among the leaves;
+/// compliances log-uniform over `decades` decades from 1e-4.
+pub fn random_mechanism(
+    rng: &mut Xoshiro256PlusPlus,
+    n: usize,
+    loops: usize,
+    max_ee: usize,
+    decades: f64,
+) -> MechanismDesc {
+    let mut d = MechanismDesc::new("random");
+    let mut pos = vec![[0.0; 3]];
+    d.link(LinkDesc::new("base", [0.0; 3]));
+    let mut has_child = vec![false; n + 1];
+    let mut joints = 0;
+    let mut add_joint = |d: &mut MechanismDesc,
+                         rng: &mut Xoshiro256PlusPlus,
+                         p: usize,
+                         c: usize,
+                         pos: &[[f64; 3]],
+                         closes_loop: bool| {
+        let anchor = {
+            let t = rng.random_range(0.0..1.0);
+            let j = v3(rng, 0.05);
+            core::array::from_fn(|k| pos[p][k] + t * (pos[c][k] - pos[p][k]) + j[k])
+        };
+        let name = format!("j{joints}");
+        joints += 1;
+        let pn = if p == 0 {
+            "base".to_owned()
+        } else {
+            format!("l{p}")
+        };
+        let cn = format!("l{c}");
+        // Loop-closing joints are hinges or balls, as in real mechanisms: a closing weld or
+        // slider makes the loop nearly rigid in most directions.
+        let kind = if closes_loop {
+            [0, 2][rng.random_range(0..2)]
+        } else {
+            rng.random_range(0..4)
+        };
+        let joint = match kind {
+            0 => JointDesc::hinge(&name, &pn, &cn, anchor, unit(rng)),
+            1 => JointDesc::slider(&name, &pn, &cn, anchor, unit(rng)),
+            2 => JointDesc::ball(&name, &pn, &cn, anchor),
+            _ => JointDesc::weld(&name, &pn, &cn, anchor),
+        };
+        let dof = [1, 1, 3, 6][kind];
+        let c: Vec<f64> = (0..dof)
+            .map(|_| 10f64.powf(rng.random_range(-4.0..(decades - 4.0))))
+            .collect();
+        d.joint(joint.compliance(&c));
+    };
+    let mut parent = vec![0usize];
+    for i in 1..=n {
+        let p = rng.random_range(0..i);
+        parent.push(p);
+        let off = v3(rng, 0.6);
+        let q = {
+            let a = unit(rng);
+            let ang: f64 = rng.random_range(-3.0..3.0);
+            let s = (ang / 2.0).sin();
+            [a[0] * s, a[1] * s, a[2] * s, (ang / 2.0).cos()]
+        };
+        let p3: [f64; 3] = core::array::from_fn(|k| pos[p][k] + off[k]);
+        pos.push(p3);
+        let m = rng.random_range(0.1..2.0);
+        let inertia = [
+            m * rng.random_range(0.01..0.1),
+            m * rng.random_range(0.01..0.1),
+            m * rng.random_range(0.01..0.1),
+        ];
+        d.link(
+            LinkDesc::new(&format!("l{i}"), p3)
+                .rotation(q)
+                .mass(m, inertia)
+                .com(v3(rng, 0.1)),
+        );
+        add_joint(&mut d, rng, p, i, &pos, false);
+        has_child[p] = true;
+    }
+    // Loops join two branches, as the rungs of a ladder do: the closing joint's parent is
+    // never a tree ancestor of its child (a closure back onto one's own ancestor makes a short
+    // stiff cycle that locks most directions).
+    let ancestor = |a: usize, mut b: usize| {
+        while b != 0 {
+            b = parent[b];
+            if b == a {
+                return true;
+            }
+        }
+        false
+    };
+    let mut made = 0;
+    for _ in 0..20 * loops {
+        if made == loops || n < 3 {
+            break;
+        }
+        let c = rng.random_range(2..=n);
+        let p = rng.random_range(1..c);
+        if ancestor(p, c) {
+            continue;
+        }
+        add_joint(&mut d, rng, p, c, &pos, true);
+        has_child[p] = true;
+        made += 1;
+    }
+    let leaves: Vec<usize> = (1..=n).filter(|&i| !has_child[i]).collect();
+    let k = rng.random_range(1..=max_ee.min(leaves.len()));
+    let mut chosen = leaves.clone();
+    while chosen.len() > k {
+        let i = rng.random_range(0..chosen.len());
+        chosen.remove(i);
+    }
+    for l in chosen {
+        d.end_effector(&format!("l{l}"));
+    }
+    d
+}
+
+/// Largest absolute entry.
+pub fn max_abs(a: &Mat<f64>) -> f64 {
+    crate::linalg::max_abs(a.as_ref())
+}
+
+/// Largest block-by-block relative difference of two 6k × 6k matrices: each block's max entry
+/// error over that block's max reference entry (floored at `floor` of the whole matrix, for
+/// blocks that are exactly zero in the reference).
+pub fn block_rel_error(a: &Mat<f64>, reference: &Mat<f64>, floor: f64) -> f64 {
+    let whole = max_abs(reference);
+    let (br, bc) = (reference.nrows() / 6, reference.ncols() / 6);
+    let mut worst = 0.0_f64;
+    for i in 0..br {
+        for j in 0..bc {
+            let (mut num, mut den) = (0.0_f64, 0.0_f64);
+            for r in 0..6 {
+                for c in 0..6 {
+                    let (x, y) = (a[(6 * i + r, 6 * j + c)], reference[(6 * i + r, 6 * j + c)]);
+                    num = num.max((x - y).abs());
+                    den = den.max(y.abs());
+                }
+            }
+            worst = worst.max(num / den.max(floor * whole).max(f64::MIN_POSITIVE));
+        }
+    }
+    worst
+}

@@ -1,0 +1,70 @@
+//! Every tolerance of the crate, with its unit and its reason. Algorithms take these as
+//! defaults of explicit parameters ([`crate::Tsvd`], [`crate::reference::StaticOptions`]); none is a bare
+//! literal inside an algorithm.
+
+/// Factor on the truncated-SVD threshold of FORK⁻¹S eq. 9, `ε = max(m, n)·‖A‖₂·ε_mach`
+/// (dimensionless).
+///
+/// Eq. 9 bounds the round-off of one SVD of `A`. The matrices reduced here are sums of up to
+/// hundreds of congruences `Ad C Adᵀ`, whose accumulated round-off in structurally zero
+/// directions is tens of ulp of ‖A‖, above eq. 9's bound; the paper reports tuning the threshold
+/// "until the rank matches the expected value". A factor of 10² puts the threshold at ~1e-13·‖A‖
+/// for 6×6 blocks: above that round-off, and below the smallest physical singular value met in
+/// the acceptance test (random trees with compliances over six decades reach 6e-12·‖C‖, which a
+/// factor of 10⁴ wrongly truncates). The rank is always checked against an independent count
+/// ([`crate::Error::Rank`]).
+pub const TSVD_FACTOR: f64 = 1e2;
+
+/// Smallest accepted length of a joint axis before normalisation (the axis's own units, usually
+/// a unit vector): shorter axes, the zero vector included, have no reliable direction.
+pub const AXIS_MIN_NORM: f64 = 1e-9;
+
+/// Newton's stopping test for the nonlinear statics: the residual (joint-space force balance
+/// and loop closure), relative to the scale of the loads and spring forces involved. The
+/// 36-link ladder's 19 loops stall at 2e-10 (round-off of the multipliers' sums over the
+/// loops); 1e-9 is above that floor and, for the displacements of the tests (≥ 1e-5 of the
+/// bounding radius), moves a pose by less than 1e-14 of it.
+pub const STATIC_RESIDUAL_REL: f64 = 1e-9;
+
+/// Most Newton iterations of the nonlinear statics before reporting
+/// [`crate::Error::NoConvergence`] (load steps are added before Newton would need more).
+pub const STATIC_MAX_ITERATIONS: usize = 60;
+
+/// Relative step of the central differences that form the Newton tangent of the nonlinear
+/// statics (dimensionless, times `1 + |θ|`): truncation ~h² ≈ 1e-12, rounding ~ε/h ≈ 2e-10 of
+/// the residual scale. The tangent's accuracy only sets the convergence rate, not the solution.
+pub const STATIC_FD_STEP: f64 = 1e-6;
+
+/// Smallest backtracking fraction of a Newton step in the nonlinear statics: below it the
+/// step is taken anyway (the merit function is then flat at round-off level).
+pub const STATIC_MIN_STEP: f64 = 1.0 / 1024.0;
+
+/// Largest ratio `σ_{r+1}/σ_r` accepted at the rank `r` the joints give (dimensionless): the
+/// reduced matrices are truncated to that rank only when their spectrum has a clear gap there.
+/// Round-off directions of the walk sit 11–15 decades below the physical ones in the bundled
+/// and random mechanisms; the physical spectrum of a compliance spans at most the square of
+/// the compliance range. 1e-6 separates the two with room on both sides.
+pub const RANK_GAP: f64 = 1e-4;
+
+/// Projected Gauss–Seidel sweeps allowed per step (contacts of a few end effectors converge
+/// in tens of sweeps; the cap bounds the cost of a badly conditioned step).
+pub const PGS_ITERATIONS: usize = 200;
+
+/// PGS stops when no impulse changed by more than this fraction of the largest normal impulse
+/// in a sweep (dimensionless).
+pub const PGS_TOLERANCE: f64 = 1e-10;
+
+/// Fraction of a penetration removed per step (dimensionless): 0.2 removes it in a few steps
+/// without the energy gain of a full correction.
+pub const CONTACT_ERP: f64 = 0.2;
+
+/// Default contact margin (m): shape points closer than this to an obstacle are contacts, so
+/// a contact is seen one step before it closes. Mechanisms in other units set it explicitly.
+pub const CONTACT_MARGIN: f64 = 1e-2;
+
+/// Iterations allowed to the fixed point of a blended model's statics.
+pub const BLEND_STATIC_ITERATIONS: usize = 500;
+
+/// The blended statics stop when the end effectors move less than this in a pass (scaled
+/// twist norm, dimensionless: lengths over the bounding radius, angles over π).
+pub const BLEND_STATIC_TOLERANCE: f64 = 1e-13;

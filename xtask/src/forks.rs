@@ -1,0 +1,330 @@
+//! `cargo xtask bench --case forks`: the FORK⁻¹S study (issue 14), in a release build.
+//!
+//! - **Table 1**: µs per step (end-effector step and every internal link's pose) of the bundled
+//!   helix, ladder and robot arm on 1 and 2 threads, next to the paper's Vortex and FORK⁻¹S
+//!   figures (Intel i7 2.8 GHz, 4 cores, 2014–16).
+//! - **Table 2**: µs per blended step (Algorithm 5: weights, Algorithm 3 on three matrices,
+//!   eq. 28, the step, Algorithm 4) with 1, 2 and 4 models, next to the paper's.
+//! - **Fig. 7**: relative constraint error against relative end-effector displacement, single
+//!   and blended, for the "Y" and the ladder, against the full nonlinear statics; written as
+//!   `fig7-<name>.csv` and `fig7-<name>.svg`. The same rows give reduced-vs-full end-effector
+//!   pose error at equal loads.
+//!
+//! Output directory: `--out DIR` (default `target/bench`).
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use glam::DVec3;
+use impulse_geom::Pose;
+use impulse_reduced::blend::BlendedModel;
+use impulse_reduced::reference::{Configuration, Load, StaticOptions, solve_statics};
+use impulse_reduced::study::{Fig7Row, fig7};
+use impulse_reduced::{ConstructOptions, Mechanism, ReducedModel, ReducedSim, scenes};
+
+use crate::Result;
+
+/// The `--case` name of this study.
+pub const CASE: &str = "forks";
+
+/// A Fig. 7 study: name, mechanism, force direction, load magnitudes, sample magnitudes,
+/// Newton tolerance.
+type Study = (&'static str, Mechanism, DVec3, Vec<f64>, Vec<f64>, f64);
+
+/// Newton tolerance of the ladder's full solves: with 19 loops the finite-difference tangent
+/// and the truncated KKT solve stall between 1e-9 and 1e-8 of the force scale at the larger
+/// loads (beyond 150 N sideways they stall higher and the ladder study stops at 120 N).
+const LADDER_STATIC_TOLERANCE: f64 = 1e-7;
+
+/// Steps timed per measurement (after as many warm-up steps).
+const STEPS: usize = 2000;
+
+/// Paper Table 1: (example, links, Vortex µs, N=1, N=4, N=8).
+const TABLE1: [(&str, usize, f64, f64, f64, f64); 5] = [
+    ("helix-50", 50, 240.0, 20.0, 12.0, 15.0),
+    ("helix-100", 100, 470.0, 32.0, 16.0, 21.0),
+    ("helix-400", 400, 2150.0, 112.0, 84.0, 76.0),
+    ("ladder-48", 48, 334.0, 22.0, 14.0, 18.0),
+    ("robot-arm-20", 20, 121.0, 24.0, 18.0, 21.0),
+];
+
+/// Paper Table 2: (example, Vortex µs, 1, 2, 4 models; 4 threads).
+const TABLE2: [(&str, f64, f64, f64, f64); 3] = [
+    ("helix-200", 1048.0, 78.0, 96.0, 160.0),
+    ("ladder-36", 302.0, 37.0, 82.0, 99.0),
+    ("robot-arm-20", 121.0, 26.0, 47.0, 86.0),
+];
+
+fn mechanism(name: &str) -> Result<Mechanism> {
+    let desc = scenes::bundled()
+        .into_iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, d)| d)
+        .or_else(|| (name == "helix-200").then(|| scenes::helix(200)))
+        .ok_or_else(|| format!("no bundled mechanism {name}"))?;
+    desc.build().map_err(|e| format!("{name}: {e}"))
+}
+
+fn err<E: std::fmt::Display>(what: &str) -> impl Fn(E) -> String + '_ {
+    move |e| format!("{what}: {e}")
+}
+
+/// µs per single-model step with `threads` threads.
+fn time_single(m: &Mechanism, model: &ReducedModel, threads: usize) -> Result<f64> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(err("thread pool"))?;
+    let mut s = ReducedSim::new(m, model.clone(), 1e-3).map_err(err("sim"))?;
+    s.external[0] = 1.0;
+    let mut out = vec![Pose::IDENTITY; s.model.internal.len()];
+    Ok(pool.install(|| {
+        for _ in 0..STEPS {
+            s.step();
+            s.internal_poses(&mut out);
+        }
+        let t = Instant::now();
+        for _ in 0..STEPS {
+            s.step();
+            s.internal_poses(&mut out);
+        }
+        t.elapsed().as_secs_f64() * 1e6 / STEPS as f64
+    }))
+}
+
+/// Models at the rest pose and at static equilibria under a sideways force on the first end
+/// effector growing to `max_force`.
+fn models(m: &Mechanism, count: usize, max_force: f64) -> Result<Vec<ReducedModel>> {
+    let options = ConstructOptions::default();
+    let mut out =
+        vec![ReducedModel::build(m, &Configuration::rest(m), &[], &options).map_err(err("model"))?];
+    let link = m.end_effectors[0];
+    let mut warm = None;
+    for k in 1..count {
+        let load = Load {
+            link,
+            force: DVec3::new(max_force * k as f64 / (count - 1) as f64, 0.0, 0.0),
+            torque: DVec3::ZERO,
+        };
+        let statics = StaticOptions {
+            load_steps: 4,
+            tolerance: LADDER_STATIC_TOLERANCE,
+            ..StaticOptions::default()
+        };
+        let sol = solve_statics(m, &[load], warm.as_ref(), &statics).map_err(err("statics"))?;
+        out.push(ReducedModel::build(m, &sol.config, &[load], &options).map_err(err("model"))?);
+        warm = Some(sol);
+    }
+    Ok(out)
+}
+
+/// µs per blended step (Algorithm 5 and 4) with the given models, 2 threads.
+fn time_blended(m: &Mechanism, set: &BlendedModel) -> Result<f64> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .map_err(err("thread pool"))?;
+    let mut ee: Vec<Pose> = set.models[0].reference.clone();
+    let mut phi = vec![0.0; 6 * ee.len()];
+    let mut w = vec![0.0; phi.len()];
+    w[0] = 1.0;
+    let steps = STEPS / 4;
+    let _ = m;
+    pool.install(|| -> Result<f64> {
+        let t = Instant::now();
+        for _ in 0..steps {
+            let b = set
+                .step(&mut ee, &mut phi, &w, 1e-3)
+                .map_err(err("blended step"))?;
+            let internal = set.internal_poses(&ee, &b.alpha);
+            std::hint::black_box(internal);
+        }
+        Ok(t.elapsed().as_secs_f64() * 1e6 / steps as f64)
+    })
+}
+
+/// Runs the study and writes its files into `out`.
+pub fn run(out: &Path) -> Result<()> {
+    println!("FORK⁻¹S Table 1: µs per step (end effectors + every internal link), h = 1 ms");
+    println!(
+        "{:<14} {:>5} {:>9} {:>9} | paper: {:>7} {:>6} {:>6} {:>6}",
+        "example", "links", "ours N=1", "ours N=2", "Vortex", "N=1", "N=4", "N=8"
+    );
+    let mut csv = String::from(
+        "example,links,ours_n1_us,ours_n2_us,paper_vortex_us,paper_n1_us,paper_n4_us,paper_n8_us\n",
+    );
+    for (name, links, vortex, p1, p4, p8) in TABLE1 {
+        let m = mechanism(name)?;
+        let model = ReducedModel::build(
+            &m,
+            &Configuration::rest(&m),
+            &[],
+            &ConstructOptions::default(),
+        )
+        .map_err(err(name))?;
+        let t1 = time_single(&m, &model, 1)?;
+        let t2 = time_single(&m, &model, 2)?;
+        println!(
+            "{name:<14} {links:>5} {t1:>9.1} {t2:>9.1} | paper: {vortex:>7.0} {p1:>6.0} {p4:>6.0} {p8:>6.0}"
+        );
+        let _ = writeln!(
+            csv,
+            "{name},{links},{t1:.2},{t2:.2},{vortex},{p1},{p4},{p8}"
+        );
+    }
+    write(out, "table1.csv", &csv)?;
+
+    println!("\nFORK⁻¹S Table 2: µs per blended step (Algorithm 5 + 4), 2 threads");
+    println!(
+        "{:<14} {:>8} {:>8} {:>8} | paper (4 threads): {:>7} {:>5} {:>5} {:>5}",
+        "example", "1 model", "2", "4", "Vortex", "1", "2", "4"
+    );
+    let mut csv =
+        String::from("example,ours_1,ours_2,ours_4,paper_vortex,paper_1,paper_2,paper_4\n");
+    for (name, vortex, p1, p2, p4) in TABLE2 {
+        let m = mechanism(name)?;
+        let all = models(&m, 4, 10.0)?;
+        let rest: Vec<Pose> = m.end_effectors.iter().map(|&e| m.links[e].rest).collect();
+        let mut t = Vec::new();
+        for k in [1, 2, 4] {
+            let set = BlendedModel::new(all[..k].to_vec(), rest.clone(), m.bounding_radius())
+                .map_err(err("blend"))?;
+            t.push(time_blended(&m, &set)?);
+        }
+        println!(
+            "{name:<14} {:>8.1} {:>8.1} {:>8.1} | paper (4 threads): {vortex:>7.0} {p1:>5.0} {p2:>5.0} {p4:>5.0}",
+            t[0], t[1], t[2]
+        );
+        let _ = writeln!(
+            csv,
+            "{name},{:.2},{:.2},{:.2},{vortex},{p1},{p2},{p4}",
+            t[0], t[1], t[2]
+        );
+    }
+    write(out, "table2.csv", &csv)?;
+
+    println!(
+        "\nFORK⁻¹S Fig. 7: relative constraint error against relative end-effector displacement"
+    );
+    println!("(paper: single model 0.1–0.15 at displacement 1; blended zero at the samples)");
+    // The ladder's full solves stop at LADDER_STATIC_TOLERANCE (see there).
+    let studies: [Study; 2] = [
+        (
+            "y",
+            mechanism("y")?,
+            DVec3::X,
+            (1..=16).map(|k| 40.0 * k as f64).collect(),
+            vec![160.0, 320.0, 480.0, 640.0],
+            impulse_reduced::tol::STATIC_RESIDUAL_REL,
+        ),
+        (
+            "ladder-36",
+            mechanism("ladder-36")?,
+            // Out of the ladder's plane: in its plane the rung hinges lock every level.
+            DVec3::Y,
+            (1..=12).map(|k| 10.0 * k as f64).collect(),
+            vec![30.0, 60.0, 90.0, 120.0],
+            LADDER_STATIC_TOLERANCE,
+        ),
+    ];
+    for (name, m, direction, loads, samples, tolerance) in studies {
+        let statics = StaticOptions {
+            load_steps: 4,
+            tolerance,
+            ..StaticOptions::default()
+        };
+        let (rows, _) = fig7(
+            &m,
+            0,
+            direction,
+            &loads,
+            &samples,
+            &ConstructOptions::default(),
+            &statics,
+        )
+        .map_err(err(name))?;
+        println!("{name}: load N, displacement, single, blended, EE pose error single, blended");
+        let mut csv =
+            String::from("load,displacement,single,blended,single_pose_error,blended_pose_error\n");
+        for r in &rows {
+            println!(
+                "  {:7.1} {:7.3} {:10.3e} {:10.3e} {:10.3e} {:10.3e}",
+                r.load, r.displacement, r.single, r.blended, r.single_pose, r.blended_pose
+            );
+            let _ = writeln!(
+                csv,
+                "{},{},{},{},{},{}",
+                r.load, r.displacement, r.single, r.blended, r.single_pose, r.blended_pose
+            );
+        }
+        let mean = |f: fn(&Fig7Row) -> f64| rows.iter().map(f).sum::<f64>() / rows.len() as f64;
+        println!(
+            "  mean constraint error: single {:.3e}, blended {:.3e} (ratio {:.2}); samples at {samples:?} N",
+            mean(|r| r.single),
+            mean(|r| r.blended),
+            mean(|r| r.blended) / mean(|r| r.single)
+        );
+        write(out, &format!("fig7-{name}.csv"), &csv)?;
+        write(out, &format!("fig7-{name}.svg"), &plot(name, &rows))?;
+    }
+    println!(
+        "\nwrote table1.csv, table2.csv, fig7-*.csv, fig7-*.svg to {}",
+        out.display()
+    );
+    Ok(())
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> Result<()> {
+    let path = dir.join(name);
+    std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// Fig. 7 as an SVG: constraint error against displacement, single (red) and blended (blue).
+fn plot(name: &str, rows: &[Fig7Row]) -> String {
+    let (w, h, m) = (560.0, 360.0, 50.0);
+    let xmax = rows
+        .iter()
+        .map(|r| r.displacement)
+        .fold(0.0, f64::max)
+        .max(1e-9);
+    let ymax = rows
+        .iter()
+        .map(|r| r.single.max(r.blended))
+        .fold(0.0, f64::max)
+        .max(1e-12);
+    let px = |x: f64| m + (w - 2.0 * m) * x / xmax;
+    let py = |y: f64| h - m - (h - 2.0 * m) * y / ymax;
+    let line = |f: fn(&Fig7Row) -> f64, colour: &str| {
+        let pts: Vec<String> = rows
+            .iter()
+            .map(|r| format!("{:.1},{:.1}", px(r.displacement), py(f(r))))
+            .collect();
+        format!(
+            "<polyline fill=\"none\" stroke=\"{colour}\" stroke-width=\"2\" points=\"{}\"/>\n",
+            pts.join(" ")
+        )
+    };
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n<text x=\"{}\" y=\"20\" text-anchor=\"middle\" font-size=\"14\">{name}: relative constraint error against relative displacement</text>\n<rect x=\"{m}\" y=\"{m}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888\"/>\n",
+        w / 2.0,
+        w - 2.0 * m,
+        h - 2.0 * m
+    );
+    s += &line(|r| r.single, "#c33");
+    s += &line(|r| r.blended, "#33c");
+    let _ = write!(
+        s,
+        "<text x=\"{m}\" y=\"{}\">0</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{xmax:.2}</text>\n<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{ymax:.2e}</text>\n<text x=\"{}\" y=\"{}\" fill=\"#c33\">single model</text><text x=\"{}\" y=\"{}\" fill=\"#33c\">blended</text>\n</svg>\n",
+        h - m + 15.0,
+        w - m,
+        h - m + 15.0,
+        m - 4.0,
+        m + 10.0,
+        m + 10.0,
+        m + 20.0,
+        m + 10.0,
+        m + 35.0
+    );
+    s
+}
