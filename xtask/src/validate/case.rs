@@ -47,5 +47,5 @@ pub struct Case {
     /// One line: what is checked and against what reference.
     pub description: &'static str,
     /// Computes the metrics; `Err` (a message) when the computation itself fails.
-    pub run: Box<dyn Fn() -> Result<Vec<Metric>, String> + std::panic::RefUnwindSafe>,
+    pub run: Box<dyn Fn() -> Result<Vec<Metric>, String> + std::panic::RefUnwindSafe + Send + Sync>,
 }

@@ -38,6 +38,8 @@ use std::time::Instant;
 
 use crate::{Result, cases, workspace_root};
 use case::Case;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, PoisonError};
 
 /// Options of `cargo xtask validate`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -134,10 +136,19 @@ fn run_cases(all: &[Case], options: &Options, snapshot_dir: &Path) -> Result<()>
     let start = Instant::now();
     let selected = select(all, options.case.as_deref())?;
 
+    // The cases are independent: they run in parallel, then are judged and compared with
+    // their snapshots in registry order, so the table and its verdicts do not depend on the
+    // thread count. A case's wall time is then measured while others run.
+    let outcomes = run_parallel(&selected);
     let mut rows = Vec::new();
     let mut tally = Tally::default();
-    for case in selected {
-        run_case(case, options.update, snapshot_dir, &mut rows, &mut tally);
+    for (case, (outcome, seconds)) in selected.into_iter().zip(outcomes) {
+        let judged = Judged {
+            outcome,
+            seconds,
+            update: options.update,
+        };
+        judge_case(case, judged, snapshot_dir, &mut rows, &mut tally);
     }
     let stale = match options.case {
         None => stale_files(snapshot_dir, all, options.update)?,
@@ -240,14 +251,64 @@ impl Row {
     }
 }
 
-/// Runs one case: its metrics' rows, then its snapshot row.
-fn run_case(case: &Case, update: bool, dir: &Path, rows: &mut Vec<Row>, tally: &mut Tally) {
-    let start = Instant::now();
-    let result = std::panic::catch_unwind(|| (case.run)());
-    let wall = format!("{:.1}", start.elapsed().as_secs_f64() * 1e3);
+/// Runs the cases' `run` on `std::thread::available_parallelism` plain threads, each taking
+/// the next case not yet taken; returns (outcome, wall seconds) in the order of `cases`. Plain
+/// threads rather than rayon tasks: a case that installs its own rayon pools (the determinism
+/// case) would otherwise wait inside a rayon worker and run other cases while it waits.
+fn run_parallel(cases: &[&Case]) -> Vec<(RunOutcome, f64)> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(cases.len().max(1));
+    let next = AtomicUsize::new(0);
+    let slots: Vec<Mutex<Option<(RunOutcome, f64)>>> =
+        cases.iter().map(|_| Mutex::new(None)).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(case) = cases.get(i) else { break };
+                    let start = Instant::now();
+                    let outcome = std::panic::catch_unwind(|| (case.run)());
+                    let done = (outcome, start.elapsed().as_secs_f64());
+                    *slots[i].lock().unwrap_or_else(PoisonError::into_inner) = Some(done);
+                }
+            });
+        }
+    });
+    slots
+        .into_iter()
+        .map(|slot| {
+            slot.into_inner()
+                .unwrap_or_else(PoisonError::into_inner)
+                .expect("every case index below the count is taken by a thread")
+        })
+        .collect()
+}
+
+/// What a case's `run` gave: its metrics, an error, or a panic's payload.
+type RunOutcome = std::thread::Result<Result<Vec<case::Metric>>>;
+
+/// A case's run, ready to be judged.
+struct Judged {
+    outcome: RunOutcome,
+    /// Wall time of the run, s.
+    seconds: f64,
+    /// Write new and changed snapshots instead of failing on them.
+    update: bool,
+}
+
+/// Judges one case's run: its metrics' rows, then its snapshot row.
+fn judge_case(case: &Case, judged: Judged, dir: &Path, rows: &mut Vec<Row>, tally: &mut Tally) {
+    let Judged {
+        outcome,
+        seconds,
+        update,
+    } = judged;
+    let wall = format!("{:.1}", seconds * 1e3);
     let first = rows.len();
 
-    match result {
+    match outcome {
         Err(payload) => {
             tally.failed_cases += 1;
             let message = format!("panicked: {}", panic_message(payload.as_ref()));
