@@ -17,7 +17,10 @@
 //!   Poisson or Newton restitution ([`integrate`]);
 //! - [`resolve_with_microcollisions`]: static contact by microcollisions (§3.5): boosted
 //!   restitution and the reversing impulse ([`micro`]);
-//! - [`mod@reference`]: a slow, simple p_z-parameterised oracle used to check [`resolve`].
+//! - [`mod@reference`]: a slow, simple p_z-parameterised oracle used to check [`resolve`];
+//! - [`contact`]: sustained contact as constraints \[not in seed; thesis §8.1's remedy\]: the
+//!   impulses of an island of bodies over one time step, projected Gauss–Seidel with the exact
+//!   Coulomb cone ([`solve_contacts`]).
 //!
 //! **Must not know** how K was made: shapes, contact detection, multibodies, worlds. The same
 //! code serves two rigid bodies (Theorem 6: K symmetric positive definite) and, later,
@@ -37,6 +40,7 @@
 #![forbid(unsafe_code)]
 
 pub mod body;
+pub mod contact;
 pub mod integrate;
 pub mod matrix;
 pub mod micro;
@@ -46,6 +50,7 @@ pub mod reference;
 pub use body::{
     Body, ContactFrame, collision_matrix_world, cross_matrix, relative_contact_velocity,
 };
+pub use contact::{Contact, IslandBody, SolveReport, SolverSettings, solve_contacts};
 pub use integrate::{
     Mode, Parameter, Phase, Response, ResponseKind, Restitution, Settings, Stats, Sticking,
     TraceSample, resolve,

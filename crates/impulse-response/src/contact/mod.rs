@@ -1,0 +1,335 @@
+//! Sustained contact as constraints: the contact impulses of an island of bodies over one time
+//! step, by projected Gauss–Seidel with the exact Coulomb cone \[not in seed: the thesis's
+//! §8.1 names constraint-based resting contact as the remedy for microcollision trains; this is
+//! the velocity-level time-stepping formulation of Stewart–Trinkle and Anitescu–Potra, solved as
+//! Box2D, rapier and Bullet do, with the tangential step chosen so that the converged friction
+//! is exactly Coulomb's\].
+//!
+//! The caller advances the island's velocities by the non-contact forces over a step of length
+//! h (gravity, loads), then calls [`solve_contacts`]: it finds, for every contact, an impulse
+//! p = (p_t1, p_t2, p_n) in its contact frame ([`ContactFrame`]: z along the normal, from body
+//! 2 to body 1) such that, with u the relative contact velocity after all impulses:
+//! - **non-penetration with complementarity**: p_n ≥ 0, u_n ≥ u_target, and p_n = 0 wherever
+//!   u_n > u_target ([`Contact::target_normal_velocity`], e.g. 0 for resting, a small positive
+//!   speed to close a penetration: position-level stabilisation is the caller's choice);
+//! - **the Coulomb cone, exactly**: ‖p_t‖ ≤ μ·p_n; sticking (u_t = 0) inside the cone, and
+//!   sliding only on its boundary with p_t = −μ p_n u_t/‖u_t‖ (maximal dissipation): a disk,
+//!   not the pyramid of a box-friction solver, so the friction force does not depend on how the
+//!   tangent axes are turned.
+//!
+//! ## The iteration
+//! Contacts are visited in order; at each, the normal impulse is updated exactly along its own
+//! row, `Δp_n = (u_target − u_n)/K_nn`, clamped so p_n ≥ 0 (K the collision matrix of the
+//! pair, eq. 3.4); then the tangential impulse by one projected-gradient step,
+//! `p_t ← Π_{‖p_t‖ ≤ μ p_n}(p_t − u_t/λ)`, λ the largest eigenvalue of K's tangential 2 × 2
+//! block. With λ (rather than the inverse of the block, as a block solver would use) a fixed
+//! point has p_t anti-parallel to u_t, which is Coulomb's law. With targets 0 the solution
+//! never adds kinetic energy: with P the stacked impulses, W the island's Delassus matrix
+//! (u_f = u₀ + W·P; its diagonal blocks are the pairs' K) and u₀, u_f the contact velocities
+//! before and after, ΔT = P·u₀ + ½PᵀWP = P·u_f − ½PᵀWP, and P·u_f = Σ p_n u_n + p_t·u_t ≤ 0
+//! by complementarity and the cone. (A single sweep may add a little, where a smaller normal
+//! impulse shrinks the disk under a friction impulse.)
+//! It stops when no impulse update changed a contact velocity by more than
+//! [`SolverSettings::tolerance`], or after [`SolverSettings::max_iterations`] sweeps.
+//!
+//! **Warm starting**: the impulses in [`Contact::impulse`] on entry (e.g. last step's, carried
+//! over by the manifold's feature ids) are projected onto the cone and applied before the
+//! first sweep; on return they hold the solution.
+//!
+//! **Cost**: one sweep is O(number of contacts), a few dozen flops each; the number of sweeps
+//! needed grows with the island's height (a load travels one contact per sweep in the worst
+//! order), which warm starting across steps hides for islands at rest.
+//!
+//! **Must not know** how the contacts were found (manifolds), the bodies' shapes, or time
+//! stepping: it takes velocities, mass properties and contact points, and returns impulses.
+
+use glam::{DMat3, DVec2, DVec3};
+
+use crate::{Body, ContactFrame, ResponseError, collision_matrix_world, relative_contact_velocity};
+
+#[cfg(test)]
+mod tests;
+
+/// One body of an island, as the solver sees it: mass properties, centre of mass and velocity,
+/// all in world axes. The solver changes `velocity` and `omega` in place.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IslandBody {
+    /// Mass properties ([`Body::Fixed`] for an immovable body).
+    pub body: Body,
+    /// Centre of mass (world).
+    pub com: DVec3,
+    /// Velocity of the centre of mass (world).
+    pub velocity: DVec3,
+    /// Angular velocity (world).
+    pub omega: DVec3,
+}
+
+/// One contact point between body `body1` and body `body2` (or the fixed world).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// Index of body 1 in the island (receives +p).
+    pub body1: usize,
+    /// Index of body 2 (receives −p); `None` for the fixed world.
+    pub body2: Option<usize>,
+    /// The contact point (world).
+    pub point: DVec3,
+    /// Contact normal (world), pointing from body 2 towards body 1; normalised by the solver.
+    pub normal: DVec3,
+    /// Coulomb friction coefficient μ ≥ 0.
+    pub friction: f64,
+    /// The normal relative velocity the contact may not go below, u_n ≥ this (0 for resting
+    /// contact; positive to push an overlap apart).
+    pub target_normal_velocity: f64,
+    /// Accumulated impulse (p_t1, p_t2, p_n) in the contact frame
+    /// ([`ContactFrame::from_normal`] of `normal`): the warm start on entry, the solution on
+    /// return.
+    pub impulse: DVec3,
+}
+
+/// Settings of [`solve_contacts`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverSettings {
+    /// Largest number of sweeps over the contacts (default 1000).
+    pub max_iterations: usize,
+    /// Convergence tolerance, a speed (length/time): the solve stops when a whole sweep
+    /// changed no contact velocity by more than this (default 1e-9 m/s).
+    pub tolerance: f64,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: DEFAULT_MAX_ITERATIONS,
+            tolerance: DEFAULT_TOLERANCE,
+        }
+    }
+}
+
+/// Default [`SolverSettings::max_iterations`].
+pub const DEFAULT_MAX_ITERATIONS: usize = 1000;
+
+/// Default [`SolverSettings::tolerance`], m/s: far below any speed a resting or sliding
+/// contact is judged by, far above rounding of velocities of order 1 m/s.
+pub const DEFAULT_TOLERANCE: f64 = 1e-9;
+
+/// What a solve did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolveReport {
+    /// Sweeps performed.
+    pub iterations: usize,
+    /// Largest contact-velocity change of the last sweep (length/time).
+    pub residual: f64,
+    /// Whether the residual fell to the tolerance.
+    pub converged: bool,
+}
+
+/// A contact's precomputed geometry: frame, offsets, collision matrix.
+struct Row {
+    frame: ContactFrame,
+    r1: DVec3,
+    r2: DVec3,
+    /// K_nn of the contact frame.
+    k_nn: f64,
+    /// Largest eigenvalue of K's tangential block.
+    k_t: f64,
+    /// The collision matrix in the contact frame (Δu = K·Δp).
+    k: DMat3,
+}
+
+/// Finds the contact impulses of one step and applies them to the bodies' velocities (see the
+/// module documentation).
+///
+/// # Errors
+/// [`ResponseError::InvalidParameter`] for a contact that names a body out of range or the
+/// same body twice, a negative or non-finite μ, target or tolerance, or zero iterations;
+/// [`ResponseError::NonFinite`] for a non-finite point, velocity or impulse;
+/// [`ResponseError::InvalidNormal`] for a zero or non-finite normal;
+/// [`ResponseError::NormalUnreachable`] for a contact between two fixed bodies. The bodies
+/// and contacts are unchanged on error.
+pub fn solve_contacts(
+    bodies: &mut [IslandBody],
+    contacts: &mut [Contact],
+    settings: &SolverSettings,
+) -> Result<SolveReport, ResponseError> {
+    let rows = prepare(bodies, contacts, settings)?;
+    // Warm start: last impulses, projected onto the cone.
+    for (c, row) in contacts.iter_mut().zip(&rows) {
+        let p_n = c.impulse.z.max(0.0);
+        let p_t = clamp_to_disk(DVec2::new(c.impulse.x, c.impulse.y), c.friction * p_n);
+        c.impulse = DVec3::new(p_t.x, p_t.y, p_n);
+        apply(bodies, c, row, c.impulse);
+    }
+    let mut report = SolveReport {
+        iterations: 0,
+        residual: f64::INFINITY,
+        converged: contacts.is_empty(),
+    };
+    while !report.converged && report.iterations < settings.max_iterations {
+        let mut residual = 0.0_f64;
+        for (c, row) in contacts.iter_mut().zip(&rows) {
+            residual = residual.max(sweep_contact(bodies, c, row));
+        }
+        report.iterations += 1;
+        report.residual = residual;
+        report.converged = residual <= settings.tolerance;
+    }
+    if contacts.is_empty() {
+        report.residual = 0.0;
+    }
+    Ok(report)
+}
+
+/// One contact's update (normal row, then the friction disk); returns the largest contact
+/// velocity change it made.
+fn sweep_contact(bodies: &mut [IslandBody], c: &mut Contact, row: &Row) -> f64 {
+    // Normal row: exact minimiser along it, clamped to p_n ≥ 0.
+    let u = contact_velocity(bodies, c, row);
+    let p_n = (c.impulse.z + (c.target_normal_velocity - u.z) / row.k_nn).max(0.0);
+    let dp_n = p_n - c.impulse.z;
+    let dp = DVec3::new(0.0, 0.0, dp_n);
+    apply(bodies, c, row, dp);
+    c.impulse.z = p_n;
+    let u = u + row.k * dp;
+    // Friction: one projected-gradient step with step 1/λ onto the disk of radius μ p_n.
+    let p_t_old = DVec2::new(c.impulse.x, c.impulse.y);
+    let p_t = clamp_to_disk(p_t_old - DVec2::new(u.x, u.y) / row.k_t, c.friction * p_n);
+    let dp_t = p_t - p_t_old;
+    apply(bodies, c, row, DVec3::new(dp_t.x, dp_t.y, 0.0));
+    c.impulse.x = p_t.x;
+    c.impulse.y = p_t.y;
+    (row.k_nn * dp_n.abs()).max(row.k_t * dp_t.length())
+}
+
+/// The relative contact velocity u = u₁ − u₂ in the contact frame.
+fn contact_velocity(bodies: &[IslandBody], c: &Contact, row: &Row) -> DVec3 {
+    let b1 = &bodies[c.body1];
+    let (v2, w2) = match c.body2 {
+        Some(j) => (bodies[j].velocity, bodies[j].omega),
+        None => (DVec3::ZERO, DVec3::ZERO),
+    };
+    let u = relative_contact_velocity(b1.velocity, b1.omega, row.r1, v2, w2, row.r2);
+    row.frame.to_contact(u)
+}
+
+/// Applies `dp` (contact frame) to body 1 and −dp to body 2.
+fn apply(bodies: &mut [IslandBody], c: &Contact, row: &Row, dp: DVec3) {
+    let p = row.frame.to_world(dp);
+    let b1 = &mut bodies[c.body1];
+    let (dv, dw) = b1.body.velocity_change(row.r1, p);
+    b1.velocity += dv;
+    b1.omega += dw;
+    if let Some(j) = c.body2 {
+        let b2 = &mut bodies[j];
+        let (dv, dw) = b2.body.velocity_change(row.r2, -p);
+        b2.velocity += dv;
+        b2.omega += dw;
+    }
+}
+
+/// `p` scaled onto the disk of radius `radius` if outside it.
+fn clamp_to_disk(p: DVec2, radius: f64) -> DVec2 {
+    let len = p.length();
+    if len > radius {
+        if len > 0.0 { p * (radius / len) } else { p }
+    } else {
+        p
+    }
+}
+
+/// Largest eigenvalue of the symmetric 2 × 2 block [[a, b], [b, d]].
+fn largest_eigenvalue_2x2(a: f64, b: f64, d: f64) -> f64 {
+    let mean = 0.5 * (a + d);
+    let half_diff = 0.5 * (a - d);
+    mean + half_diff.hypot(b)
+}
+
+/// Validates the input and precomputes every contact's row.
+fn prepare(
+    bodies: &[IslandBody],
+    contacts: &[Contact],
+    settings: &SolverSettings,
+) -> Result<Vec<Row>, ResponseError> {
+    if settings.max_iterations == 0 {
+        return Err(ResponseError::InvalidParameter {
+            name: "solver max_iterations",
+            value: 0.0,
+            requirement: "at least 1",
+        });
+    }
+    if !(settings.tolerance.is_finite() && settings.tolerance > 0.0) {
+        return Err(ResponseError::InvalidParameter {
+            name: "solver tolerance",
+            value: settings.tolerance,
+            requirement: "finite, > 0",
+        });
+    }
+    for b in bodies {
+        if !(b.com.is_finite() && b.velocity.is_finite() && b.omega.is_finite()) {
+            return Err(ResponseError::NonFinite {
+                what: "island body position or velocity",
+            });
+        }
+    }
+    contacts
+        .iter()
+        .map(|c| prepare_row(bodies, c))
+        .collect::<Result<Vec<_>, _>>()
+}
+
+/// One contact's row, after checking it.
+fn prepare_row(bodies: &[IslandBody], c: &Contact) -> Result<Row, ResponseError> {
+    let index = |i: usize| -> Result<&IslandBody, ResponseError> {
+        bodies.get(i).ok_or(ResponseError::InvalidParameter {
+            name: "contact body index",
+            value: i as f64,
+            requirement: "below the number of island bodies",
+        })
+    };
+    let b1 = index(c.body1)?;
+    let b2 = c.body2.map(index).transpose()?;
+    if c.body2 == Some(c.body1) {
+        return Err(ResponseError::InvalidParameter {
+            name: "contact body2",
+            value: c.body1 as f64,
+            requirement: "a body other than body1",
+        });
+    }
+    if !(c.friction.is_finite() && c.friction >= 0.0) {
+        return Err(ResponseError::InvalidParameter {
+            name: "friction coefficient",
+            value: c.friction,
+            requirement: "finite, ≥ 0",
+        });
+    }
+    if !c.target_normal_velocity.is_finite() {
+        return Err(ResponseError::NonFinite {
+            what: "contact target normal velocity",
+        });
+    }
+    if !(c.point.is_finite() && c.impulse.is_finite()) {
+        return Err(ResponseError::NonFinite {
+            what: "contact point or impulse",
+        });
+    }
+    let frame = ContactFrame::from_normal(c.normal)?;
+    let r1 = c.point - b1.com;
+    let (body2, r2) = match b2 {
+        Some(b) => (b.body, c.point - b.com),
+        None => (Body::Fixed, DVec3::ZERO),
+    };
+    let k = frame.matrix_to_contact(collision_matrix_world(&b1.body, r1, &body2, r2));
+    let k_nn = k.z_axis.z;
+    let scale = k.x_axis.x + k.y_axis.y + k_nn;
+    if !(k_nn > 0.0 && scale.is_finite()) {
+        return Err(ResponseError::NormalUnreachable { k33: k_nn, scale });
+    }
+    let k_t = largest_eigenvalue_2x2(k.x_axis.x, k.y_axis.x, k.y_axis.y);
+    Ok(Row {
+        frame,
+        r1,
+        r2,
+        k_nn,
+        k_t,
+        k,
+    })
+}

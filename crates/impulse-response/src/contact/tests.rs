@@ -1,0 +1,560 @@
+//! Checks of the contact solver against analytic references: statics of a resting box and of
+//! stacks (each interface carries the weight above it), a block on an incline (sticks below
+//! tan θ = μ, slides at g(sin θ − μ cos θ) above), a ball sliding into rolling (slip falls by
+//! 7/2·μ g h per step along a fixed direction, then the rolling speed from conservation of
+//! angular momentum about the contact point), and, on random islands, the laws the solution
+//! must obey (complementarity, the Coulomb disk with friction opposite to slip, no energy
+//! gain).
+
+use super::*;
+use glam::DQuat;
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+
+const G: f64 = 9.81;
+const H: f64 = 1e-3;
+
+/// Solver settings for the analytic checks: converged far below the figures checked.
+fn tight() -> SolverSettings {
+    SolverSettings {
+        max_iterations: 200_000,
+        tolerance: 1e-12,
+    }
+}
+
+/// A solid box of mass `m` and half extents `half`, axis-aligned, centre `com`, at rest.
+fn box_body(m: f64, half: DVec3, com: DVec3) -> (IslandBody, DMat3) {
+    let inertia = box_inertia(m, half);
+    let body = Body::moving(m, inertia).unwrap();
+    (
+        IslandBody {
+            body,
+            com,
+            velocity: DVec3::ZERO,
+            omega: DVec3::ZERO,
+        },
+        inertia,
+    )
+}
+
+fn box_inertia(m: f64, half: DVec3) -> DMat3 {
+    let s = half * half;
+    DMat3::from_diagonal(DVec3::new(s.y + s.z, s.x + s.z, s.x + s.y) * (m / 3.0))
+}
+
+/// Four contacts at the corners of the face z = `z` of a box of half extents `half` centred
+/// over (x, y) = `com`, normal +z, between `upper` and `lower` (None: the floor).
+fn face_contacts(
+    com: DVec3,
+    half: DVec3,
+    z: f64,
+    upper: usize,
+    lower: Option<usize>,
+    mu: f64,
+) -> Vec<Contact> {
+    [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .iter()
+        .map(|&(sx, sy)| Contact {
+            body1: upper,
+            body2: lower,
+            point: DVec3::new(com.x + sx * half.x, com.y + sy * half.y, z),
+            normal: DVec3::Z,
+            friction: mu,
+            target_normal_velocity: 0.0,
+            impulse: DVec3::ZERO,
+        })
+        .collect()
+}
+
+/// Σ p_n of contacts `range`.
+fn normal_sum(contacts: &[Contact]) -> f64 {
+    contacts.iter().map(|c| c.impulse.z).sum()
+}
+
+fn kinetic_energy(bodies: &[IslandBody], inertias: &[DMat3], masses: &[f64]) -> f64 {
+    bodies
+        .iter()
+        .zip(inertias.iter().zip(masses))
+        .map(|(b, (i, &m))| 0.5 * m * b.velocity.length_squared() + 0.5 * b.omega.dot(*i * b.omega))
+        .sum()
+}
+
+#[test]
+fn resting_box_carries_its_weight_and_stops() {
+    let (m, half) = (2.0, DVec3::new(0.3, 0.2, 0.1));
+    let (mut b, _) = box_body(m, half, DVec3::new(0.0, 0.0, half.z));
+    b.velocity.z = -G * H; // gravity over one step
+    let mut bodies = [b];
+    let mut contacts = face_contacts(bodies[0].com, half, 0.0, 0, None, 0.5);
+    let report = solve_contacts(&mut bodies, &mut contacts, &tight()).unwrap();
+    assert!(report.converged, "{report:?}");
+    assert!(
+        bodies[0].velocity.length() < 1e-11,
+        "{:?}",
+        bodies[0].velocity
+    );
+    assert!(bodies[0].omega.length() < 1e-10, "{:?}", bodies[0].omega);
+    // Momentum: the contacts' total impulse is m·Δv = m g h ẑ. How the four corners share it
+    // is statically indeterminate (their friction may hold a self-cancelling prestress); each
+    // stays in its cone.
+    let weight = m * G * H;
+    let total: DVec3 = contacts.iter().map(|c| c.frame_impulse_world()).sum();
+    assert!((total - DVec3::new(0.0, 0.0, weight)).length() < 1e-9 * weight, "{total:?}");
+    for c in &contacts {
+        assert!(c.impulse.z >= 0.0);
+        assert!(c.impulse.truncate().length() <= c.friction * c.impulse.z * (1.0 + 1e-12));
+    }
+}
+
+/// A stack of `n` blocks resting on the floor, each kicked by one step of gravity: afterwards
+/// every block is at rest and the interface below block k carries the weight of the n − k
+/// blocks above it (statics, independent of how the 4 corners share it).
+#[test]
+fn stack_interfaces_carry_the_weight_above() {
+    let (m, half) = (1.5, DVec3::new(0.1, 0.075, 0.05));
+    for n in [2usize, 4, 8] {
+        let mut bodies = Vec::new();
+        let mut contacts = Vec::new();
+        for k in 0..n {
+            let com = DVec3::new(0.0, 0.0, (2 * k + 1) as f64 * half.z);
+            let (mut b, _) = box_body(m, half, com);
+            b.velocity.z = -G * H;
+            bodies.push(b);
+            let lower = k.checked_sub(1);
+            contacts.extend(face_contacts(com, half, com.z - half.z, k, lower, 0.6));
+        }
+        let report = solve_contacts(&mut bodies, &mut contacts, &tight()).unwrap();
+        assert!(report.converged, "n = {n}: {report:?}");
+        eprintln!("stack of {n}: {} sweeps to 1e-12 m/s", report.iterations);
+        for (k, b) in bodies.iter().enumerate() {
+            assert!(
+                b.velocity.length() < 1e-9,
+                "n {n} block {k}: {:?}",
+                b.velocity
+            );
+            assert!(b.omega.length() < 1e-8, "n {n} block {k}: {:?}", b.omega);
+            let carried = normal_sum(&contacts[4 * k..4 * k + 4]);
+            let above = (n - k) as f64 * m * G * H;
+            assert!(
+                (carried - above).abs() < 1e-8 * above,
+                "n {n} interface {k}: {carried} vs {above}"
+            );
+        }
+    }
+}
+
+/// A block at rest on a plane tilted by θ (gravity turned instead): with μ = 0.5 it sticks
+/// for tan θ = 0.4, friction holding m g sin θ; for tan θ = 0.7 it slides at
+/// a = g (sin θ − μ cos θ) without turning, step after step.
+#[test]
+fn block_on_incline_sticks_below_and_slides_above_tan_theta() {
+    let (m, half, mu) = (3.0, DVec3::new(0.3, 0.2, 0.1), 0.5);
+    for tan in [0.4_f64, 0.7] {
+        let theta = tan.atan();
+        let gravity = G * DVec3::new(theta.sin(), 0.0, -theta.cos());
+        let (b, _) = box_body(m, half, DVec3::new(0.0, 0.0, half.z));
+        let mut bodies = [b];
+        let mut contacts = face_contacts(bodies[0].com, half, 0.0, 0, None, mu);
+        let a = if tan < mu {
+            0.0
+        } else {
+            G * (theta.sin() - mu * theta.cos())
+        };
+        for step in 1..=50 {
+            bodies[0].velocity += gravity * H;
+            let report = solve_contacts(&mut bodies, &mut contacts, &tight()).unwrap();
+            assert!(report.converged, "tan {tan} step {step}: {report:?}");
+            let v = bodies[0].velocity;
+            let expected = a * H * step as f64;
+            assert!(
+                (v.x - expected).abs() < 1e-10,
+                "tan {tan} step {step}: {v:?}"
+            );
+            assert!(v.y.abs() < 1e-12 && v.z.abs() < 1e-10, "{v:?}");
+            assert!(bodies[0].omega.length() < 1e-9, "{:?}", bodies[0].omega);
+        }
+        let friction: f64 = contacts.iter().map(|c| c.frame_impulse_world().x).sum();
+        let expected = if tan < mu {
+            -m * G * theta.sin() * H
+        } else {
+            -mu * m * G * theta.cos() * H
+        };
+        assert!(
+            (friction - expected).abs() < 1e-9 * expected.abs(),
+            "tan {tan}"
+        );
+    }
+}
+
+impl Contact {
+    /// This contact's impulse in world axes (test helper).
+    fn frame_impulse_world(&self) -> DVec3 {
+        ContactFrame::from_normal(self.normal)
+            .unwrap()
+            .to_world(self.impulse)
+    }
+}
+
+/// 200 random balls (radius, μ, g, launch velocity in any horizontal direction, any spin)
+/// sliding on a floor: the slip s = v + ω × (−r ẑ) falls by exactly 7/2·μ g h per step along
+/// its initial direction, the ball rolls from the step t* = |s₀|/(7/2 μ g) falls in, with the
+/// rolling velocity given by conservation of the angular momentum about the contact point,
+/// L = I ω + m r ẑ × v (friction and the normal force act at the contact, gravity along ẑ
+/// through the centre), and the spin about the vertical untouched.
+#[test]
+fn random_balls_slide_into_rolling_as_the_closed_form_says() {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+    for case in 0..200 {
+        let r = rng.random_range(0.01..0.3);
+        let m = rng.random_range(0.1..10.0);
+        let mu = rng.random_range(0.05..1.0);
+        let g = rng.random_range(1.0..20.0);
+        let dir = rng.random_range(0.0..std::f64::consts::TAU);
+        let v0 = DVec3::new(dir.cos(), dir.sin(), 0.0) * rng.random_range(0.1..5.0);
+        let omega0 = DVec3::new(
+            rng.random_range(-30.0..30.0),
+            rng.random_range(-30.0..30.0),
+            rng.random_range(-30.0..30.0),
+        ) * (0.1 / r);
+        let i = 0.4 * m * r * r;
+        let body = Body::moving(m, DMat3::from_diagonal(DVec3::splat(i))).unwrap();
+        let mut bodies = [IslandBody {
+            body,
+            com: DVec3::new(0.0, 0.0, r),
+            velocity: v0,
+            omega: omega0,
+        }];
+        let mut contacts = [Contact {
+            body1: 0,
+            body2: None,
+            point: DVec3::ZERO,
+            normal: DVec3::Z,
+            friction: mu,
+            target_normal_velocity: 0.0,
+            impulse: DVec3::ZERO,
+        }];
+        let slip = |b: &IslandBody| b.velocity + b.omega.cross(DVec3::new(0.0, 0.0, -r));
+        let s0 = slip(&bodies[0]);
+        let rate = 3.5 * mu * g * H; // slip lost per step
+        let t_star = s0.length() / (3.5 * mu * g);
+        let l_h = {
+            let l = i * omega0 + m * r * DVec3::Z.cross(v0);
+            DVec3::new(l.x, l.y, 0.0)
+        };
+        let omega_star = l_h / (i + m * r * r);
+        let v_star = r * omega_star.cross(DVec3::Z);
+        let scale = v0.length() + r * omega0.length();
+        let mut rolled_at = None;
+        let steps = (t_star / H).ceil() as usize + 3;
+        for step in 1..=steps {
+            bodies[0].velocity.z -= g * H;
+            let report = solve_contacts(&mut bodies, &mut contacts, &tight()).unwrap();
+            assert!(report.converged, "case {case} step {step}: {report:?}");
+            let s = slip(&bodies[0]);
+            assert!(s.z.abs() < 1e-10 * scale, "case {case}: {s:?}");
+            let expected = s0.length() - rate * step as f64;
+            if expected > 0.0 {
+                assert!(
+                    (s.length() - expected).abs() < 1e-9 * scale,
+                    "case {case} step {step}: slip {} vs {expected}",
+                    s.length()
+                );
+                assert!(
+                    s.normalize().dot(s0.normalize()) > 1.0 - 1e-9,
+                    "case {case}"
+                );
+            } else {
+                assert!(s.length() < 1e-9 * scale, "case {case} step {step}: {s:?}");
+                rolled_at.get_or_insert(step);
+            }
+        }
+        let k = rolled_at.unwrap_or_else(|| panic!("case {case}: never rolls"));
+        assert!(
+            (k as f64 * H - t_star).abs() <= H,
+            "case {case}: {k} vs {t_star}"
+        );
+        let b = &bodies[0];
+        let v_h = DVec3::new(b.velocity.x, b.velocity.y, 0.0);
+        assert!(
+            (v_h - v_star).length() < 1e-9 * scale,
+            "case {case}: {v_h:?} vs {v_star:?}"
+        );
+        assert!(
+            (b.omega.z - omega0.z).abs() < 1e-12 * scale / r,
+            "case {case}"
+        );
+    }
+}
+
+/// A random island: 2–5 bodies of random mass and turned inertia, 1–10 contacts between
+/// random pairs or with the world, random normals, points, velocities and μ.
+fn random_island(
+    rng: &mut Xoshiro256PlusPlus,
+) -> (Vec<IslandBody>, Vec<DMat3>, Vec<f64>, Vec<Contact>) {
+    let n = rng.random_range(2..=5usize);
+    let mut bodies = Vec::new();
+    let mut inertias = Vec::new();
+    let mut masses = Vec::new();
+    let unit = |rng: &mut Xoshiro256PlusPlus| loop {
+        let v = DVec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        if v.length() > 0.1 && v.length() < 1.0 {
+            return v.normalize();
+        }
+    };
+    for _ in 0..n {
+        let m = rng.random_range(0.1..10.0);
+        let half = DVec3::new(
+            rng.random_range(0.02..0.5),
+            rng.random_range(0.02..0.5),
+            rng.random_range(0.02..0.5),
+        );
+        let rot = DMat3::from_quat(DQuat::from_axis_angle(
+            unit(rng),
+            rng.random_range(0.0..3.0),
+        ));
+        let inertia = rot * box_inertia(m, half) * rot.transpose();
+        let inertia = 0.5 * (inertia + inertia.transpose());
+        bodies.push(IslandBody {
+            body: Body::moving(m, inertia).unwrap(),
+            com: unit(rng) * rng.random_range(0.0..1.0),
+            velocity: unit(rng) * rng.random_range(0.0..3.0),
+            omega: unit(rng) * rng.random_range(0.0..10.0),
+        });
+        inertias.push(inertia);
+        masses.push(m);
+    }
+    let contacts = (0..rng.random_range(1..=10usize))
+        .map(|_| {
+            let body1 = rng.random_range(0..n);
+            let body2 = if rng.random_range(0..3u32) == 0 {
+                None
+            } else {
+                let j = rng.random_range(0..n - 1);
+                Some(if j >= body1 { j + 1 } else { j })
+            };
+            Contact {
+                body1,
+                body2,
+                point: unit(rng) * rng.random_range(0.0..1.0),
+                normal: unit(rng),
+                friction: rng.random_range(0.0..1.5),
+                target_normal_velocity: 0.0,
+                impulse: DVec3::ZERO,
+            }
+        })
+        .collect();
+    (bodies, inertias, masses, contacts)
+}
+
+/// The solution's laws on 500 random islands: p_n ≥ 0 and u_n ≥ 0 with p_n·u_n = 0; ‖p_t‖ ≤
+/// μ p_n; where a contact slides, p_t = −μ p_n u_t/‖u_t‖ (Coulomb, maximal dissipation);
+/// where it sticks, u_t = 0; and the kinetic energy does not rise.
+#[test]
+fn random_islands_obey_complementarity_coulomb_and_dissipation() {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
+    let settings = SolverSettings {
+        max_iterations: 100_000,
+        tolerance: 1e-13,
+    };
+    let (mut converged, mut sliding, mut sticking) = (0, 0, 0);
+    for case in 0..500 {
+        let (mut bodies, inertias, masses, mut contacts) = random_island(&mut rng);
+        let before = kinetic_energy(&bodies, &inertias, &masses);
+        let report = solve_contacts(&mut bodies, &mut contacts, &settings).unwrap();
+        if !report.converged {
+            continue;
+        }
+        converged += 1;
+        let after = kinetic_energy(&bodies, &inertias, &masses);
+        assert!(
+            after <= before * (1.0 + 1e-9),
+            "case {case}: {before} → {after}"
+        );
+        for c in &contacts {
+            let row = prepare_row(&bodies, c).unwrap();
+            let u = contact_velocity(&bodies, c, &row);
+            let p = c.impulse;
+            let scale = 1e-7 * (1.0 + u.length());
+            assert!(p.z >= 0.0 && u.z >= -scale, "case {case}: p {p:?} u {u:?}");
+            assert!(
+                p.z * u.z <= scale * p.z.max(1e-12),
+                "case {case}: p {p:?} u {u:?}"
+            );
+            let (p_t, u_t) = (DVec2::new(p.x, p.y), DVec2::new(u.x, u.y));
+            assert!(
+                p_t.length() <= c.friction * p.z * (1.0 + 1e-12) + 1e-15,
+                "case {case}"
+            );
+            if u_t.length() > 1e-6 && p.z > 1e-9 {
+                sliding += 1;
+                let coulomb = -c.friction * p.z * u_t / u_t.length();
+                assert!(
+                    (p_t - coulomb).length() <= 1e-6 * c.friction * p.z + 1e-12,
+                    "case {case}: p_t {p_t:?} vs Coulomb {coulomb:?}"
+                );
+            } else if p.z > 1e-9 && p_t.length() < c.friction * p.z * (1.0 - 1e-6) {
+                sticking += 1;
+                assert!(
+                    u_t.length() < 1e-7,
+                    "case {case}: sticking with u_t {u_t:?}"
+                );
+            }
+        }
+    }
+    eprintln!("{converged}/500 converged; {sliding} sliding, {sticking} sticking contacts");
+    assert!(converged >= 450, "{converged}/500 converged");
+    assert!(
+        sliding >= 50 && sticking >= 50,
+        "{sliding} sliding, {sticking} sticking"
+    );
+}
+
+/// Warm-started from its own solution, a resting stack is solved in one sweep and keeps it.
+#[test]
+fn warm_start_from_the_solution_takes_one_sweep() {
+    let (m, half) = (1.0, DVec3::new(0.1, 0.1, 0.05));
+    let mut bodies = Vec::new();
+    let mut contacts = Vec::new();
+    for k in 0..6 {
+        let com = DVec3::new(0.0, 0.0, (2 * k + 1) as f64 * half.z);
+        bodies.push(box_body(m, half, com).0);
+        contacts.extend(face_contacts(
+            com,
+            half,
+            com.z - half.z,
+            k,
+            k.checked_sub(1),
+            0.5,
+        ));
+    }
+    let kick = |bodies: &mut Vec<IslandBody>| {
+        for b in bodies.iter_mut() {
+            b.velocity = DVec3::new(0.0, 0.0, -G * H);
+            b.omega = DVec3::ZERO;
+        }
+    };
+    kick(&mut bodies);
+    let cold = solve_contacts(&mut bodies, &mut contacts, &tight()).unwrap();
+    let solution: Vec<DVec3> = contacts.iter().map(|c| c.impulse).collect();
+    kick(&mut bodies);
+    let warm = solve_contacts(&mut bodies, &mut contacts, &tight()).unwrap();
+    assert!(cold.iterations > 10, "{cold:?}");
+    assert_eq!(warm.iterations, 1, "{warm:?}");
+    // One sweep within the tolerance moves an impulse by at most tolerance/K_nn ≤ tolerance·m.
+    for (c, p) in contacts.iter().zip(&solution) {
+        assert!((c.impulse - *p).length() <= 2.0 * tight().tolerance * m, "{c:?} vs {p:?}");
+    }
+}
+
+#[test]
+fn bad_input_is_refused_and_changes_nothing() {
+    let half = DVec3::splat(0.1);
+    let (b, _) = box_body(1.0, half, DVec3::new(0.0, 0.0, 0.1));
+    let good = face_contacts(b.com, half, 0.0, 0, None, 0.5)[0];
+    let fixed = IslandBody {
+        body: Body::Fixed,
+        ..b
+    };
+    let cases: Vec<(Vec<IslandBody>, Contact, SolverSettings, &str)> = vec![
+        (vec![b], Contact { body1: 3, ..good }, tight(), "index"),
+        (
+            vec![b, b],
+            Contact {
+                body2: Some(0),
+                ..good
+            },
+            tight(),
+            "body2",
+        ),
+        (
+            vec![b],
+            Contact {
+                friction: -0.1,
+                ..good
+            },
+            tight(),
+            "friction",
+        ),
+        (
+            vec![b],
+            Contact {
+                friction: f64::NAN,
+                ..good
+            },
+            tight(),
+            "friction",
+        ),
+        (
+            vec![b],
+            Contact {
+                point: DVec3::NAN,
+                ..good
+            },
+            tight(),
+            "point",
+        ),
+        (
+            vec![b],
+            Contact {
+                normal: DVec3::ZERO,
+                ..good
+            },
+            tight(),
+            "normal",
+        ),
+        (
+            vec![b],
+            Contact {
+                target_normal_velocity: f64::INFINITY,
+                ..good
+            },
+            tight(),
+            "target",
+        ),
+        (vec![fixed], good, tight(), "two fixed"),
+        (
+            vec![b],
+            good,
+            SolverSettings {
+                tolerance: 0.0,
+                ..tight()
+            },
+            "tolerance",
+        ),
+        (
+            vec![b],
+            good,
+            SolverSettings {
+                max_iterations: 0,
+                ..tight()
+            },
+            "iterations",
+        ),
+        (
+            vec![IslandBody {
+                velocity: DVec3::NAN,
+                ..b
+            }],
+            good,
+            tight(),
+            "velocity",
+        ),
+    ];
+    for (mut bodies, contact, settings, what) in cases {
+        let before = bodies.clone();
+        let mut contacts = [contact];
+        let result = solve_contacts(&mut bodies, &mut contacts, &settings);
+        assert!(result.is_err(), "{what}: {result:?}");
+        // Debug text, so that NaN inputs compare equal to themselves.
+        assert_eq!(format!("{bodies:?}"), format!("{before:?}"), "{what}");
+        assert_eq!(
+            format!("{:?}", contacts[0]),
+            format!("{contact:?}"),
+            "{what}"
+        );
+    }
+}
