@@ -1,0 +1,845 @@
+//! Tests of contact manifolds against independent references: closed forms for boxes, spheres
+//! and ellipsoids, an independent 2-D intersection of squares, and brute force on random
+//! convex hulls.
+
+use super::clip;
+use super::*;
+use crate::brute;
+use crate::motion::testkit::{random_rotation, rng, unit_vector};
+use glam::{DQuat, DVec2};
+use impulse_geom::{ConvexPolyhedron, Ellipsoid, Sphere, primitives};
+use rand::RngExt;
+
+/// The contact tolerance of these tests (m; ε_c for bodies of 5–20 cm, thesis §2.2).
+const TOL: f64 = 1e-4;
+/// Agreement with closed forms (m; coordinates of order 0.1–1).
+const EXACT: f64 = 1e-12;
+
+fn cuboid(h: DVec3) -> Convex {
+    Convex::Polyhedron(primitives::cuboid(h).unwrap())
+}
+
+fn poly(c: &Convex) -> &ConvexPolyhedron {
+    match c {
+        Convex::Polyhedron(p) => p,
+        _ => unreachable!("a polyhedron"),
+    }
+}
+
+/// A 2 m × 2 m × 0.2 m floor whose top face is the plane z = 0.
+fn floor() -> (Convex, Pose) {
+    (
+        cuboid(DVec3::new(1.0, 1.0, 0.1)),
+        Pose::from_translation(DVec3::new(0.0, 0.0, -0.1)),
+    )
+}
+
+/// The face of `c` whose outward normal is `dir` (body frame).
+fn face_along(c: &Convex, dir: DVec3) -> Feature {
+    let p = poly(c);
+    let f = (0..p.face_count() as u32)
+        .find(|&f| p.face_plane(f).normal.dot(dir) > 1.0 - 1e-12)
+        .unwrap();
+    Feature::Face(f)
+}
+
+/// The manifold as a simulator would ask for it: closest features cold, then the manifold.
+fn manifold(a: &Convex, pa: &Pose, b: &Convex, pb: &Pose) -> Option<Manifold> {
+    let c = shape::convex_closest(a, pa, b, pb, FeaturePair::default());
+    convex_manifold(a, pa, b, pb, &c, TOL).unwrap()
+}
+
+/// The world position of a vertex feature of a placed polyhedron.
+fn vertex_at(c: &Convex, pose: &Pose, f: Feature) -> DVec3 {
+    let Feature::Vertex(v) = f else {
+        panic!("{f:?} is not a vertex")
+    };
+    pose.transform_point(poly(c).vertex(v))
+}
+
+/// A box resting on a larger one face to face (just touching, a gap, a small overlap; any
+/// yaw; either body first): four points exactly at the small box's bottom corners, each named
+/// by its corner and the floor's top face, the floor's point straight below it, the gap the
+/// analytic one. Lifted beyond the tolerance: no manifold.
+#[test]
+fn a_box_on_a_larger_box_is_held_at_its_four_corners() {
+    let (fl, pf) = floor();
+    let h = DVec3::new(0.1, 0.05, 0.02);
+    let bx = cuboid(h);
+    let top = face_along(&fl, DVec3::Z);
+    for (gap, yaw) in [
+        (0.0, 0.0),
+        (0.3 * TOL, 0.7),
+        (-0.5 * TOL, 2.0),
+        (0.9 * TOL, -0.3),
+    ] {
+        let pb = Pose::new(
+            DQuat::from_rotation_z(yaw),
+            DVec3::new(0.3, -0.2, h.z + gap),
+        );
+        let corners: Vec<DVec3> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .iter()
+            .map(|&(x, y)| pb.transform_point(DVec3::new(x * h.x, y * h.y, -h.z)))
+            .collect();
+        for box_first in [true, false] {
+            let m = if box_first {
+                manifold(&bx, &pb, &fl, &pf)
+            } else {
+                manifold(&fl, &pf, &bx, &pb)
+            }
+            .unwrap();
+            let sign = if box_first { -1.0 } else { 1.0 };
+            assert!((m.normal - sign * DVec3::Z).length() < EXACT, "{m:?}");
+            assert_eq!(m.points().len(), 4, "gap {gap} yaw {yaw}: {m:?}");
+            let mut seen = Vec::new();
+            for p in m.points() {
+                let (on_box, on_floor, box_id, floor_id) = if box_first {
+                    (p.point_a, p.point_b, p.id.a, p.id.b)
+                } else {
+                    (p.point_b, p.point_a, p.id.b, p.id.a)
+                };
+                let k = corners
+                    .iter()
+                    .position(|c| c.distance(on_box) < EXACT)
+                    .unwrap_or_else(|| panic!("{on_box} is no corner: {m:?}"));
+                seen.push(k);
+                let below = DVec3::new(corners[k].x, corners[k].y, 0.0);
+                assert!(on_floor.distance(below) < EXACT, "{on_floor} vs {below}");
+                assert!((p.gap - gap).abs() < EXACT, "{} vs {gap}", p.gap);
+                assert_eq!(floor_id, top);
+                assert!(vertex_at(&bx, &pb, box_id).distance(on_box) < EXACT);
+            }
+            seen.sort_unstable();
+            assert_eq!(seen, [0, 1, 2, 3]);
+        }
+    }
+    let high = Pose::from_translation(DVec3::new(0.0, 0.0, h.z + 2.0 * TOL));
+    assert!(manifold(&bx, &high, &fl, &pf).is_none());
+}
+
+/// The four corners of a square of half side `h` centred at `c`, turned by `yaw`,
+/// counter-clockwise.
+fn square(c: DVec2, yaw: f64, h: f64) -> Vec<DVec2> {
+    let (s, co) = yaw.sin_cos();
+    [(-h, -h), (h, -h), (h, h), (-h, h)]
+        .iter()
+        .map(|&(x, y)| c + DVec2::new(co * x - s * y, s * x + co * y))
+        .collect()
+}
+
+fn cross2(u: DVec2, v: DVec2) -> f64 {
+    u.x * v.y - u.y * v.x
+}
+
+fn inside2(poly: &[DVec2], p: DVec2, slack: f64) -> bool {
+    (0..poly.len()).all(|k| {
+        let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+        cross2(b - a, p - a) >= -slack * (b - a).length()
+    })
+}
+
+/// The points sorted counter-clockwise about their centroid (they are in convex position).
+fn ccw(mut pts: Vec<DVec2>) -> Vec<DVec2> {
+    let c = pts.iter().sum::<DVec2>() / pts.len() as f64;
+    pts.sort_by(|p, q| {
+        let (a, b) = ((*p - c).to_angle(), (*q - c).to_angle());
+        a.total_cmp(&b)
+    });
+    pts
+}
+
+fn shoelace(pts: &[DVec2]) -> f64 {
+    0.5 * (0..pts.len())
+        .map(|k| cross2(pts[k], pts[(k + 1) % pts.len()]))
+        .sum::<f64>()
+}
+
+/// The intersection of two convex polygons, independently of any clipping: the corners of
+/// each inside the other and the crossings of their edges, in counter-clockwise order.
+fn overlap2(p: &[DVec2], q: &[DVec2]) -> Vec<DVec2> {
+    let mut pts: Vec<DVec2> = p.iter().copied().filter(|&x| inside2(q, x, 0.0)).collect();
+    pts.extend(q.iter().copied().filter(|&x| inside2(p, x, 0.0)));
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        for j in 0..q.len() {
+            let (c, d) = (q[j], q[(j + 1) % q.len()]);
+            let den = cross2(b - a, d - c);
+            if den.abs() < 1e-300 {
+                continue;
+            }
+            let t = cross2(c - a, d - c) / den;
+            let u = cross2(c - a, b - a) / den;
+            if (0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u) {
+                pts.push(a + (b - a) * t);
+            }
+        }
+    }
+    let mut unique: Vec<DVec2> = Vec::new();
+    for x in pts {
+        if unique.iter().all(|u| u.distance(x) > 1e-12) {
+            unique.push(x);
+        }
+    }
+    if unique.len() < 3 {
+        return unique;
+    }
+    ccw(unique)
+}
+
+/// Reduced manifolds keep at least this fraction of the exact overlap area of two squares.
+/// The best four of a regular octagon's eight corners keep 1/√2 ≈ 0.707 of it; the largest
+/// quadrilateral inscribed in any convex region keeps at least 2/π ≈ 0.637 (the ellipse is the
+/// worst case, Sas 1939).
+const AREA_KEPT_MIN: f64 = 0.7;
+
+/// A square block on another, turned about the normal and offset: before reduction the
+/// clipped polygon is the overlap of the two squares (its corners, from an independent
+/// intersection, to within the merging distance); after reduction at most four of its corners,
+/// inside both squares, whose hull is the largest of any four corners (brute force over all
+/// subsets) and keeps at least [`AREA_KEPT_MIN`] of the area. Turned 45° and centred, the
+/// overlap is the regular octagon and exactly 1/√2 of it is kept.
+#[test]
+fn turned_and_offset_blocks_keep_the_overlap_area() {
+    let mut r = rng(12);
+    let (hl, thick) = (0.05, 0.025);
+    let lower = cuboid(DVec3::new(hl, hl, thick));
+    let pl = Pose::from_translation(DVec3::new(0.0, 0.0, -thick));
+    let mut worst = f64::INFINITY;
+    let (mut worst_corner, mut worst_area) = (0.0f64, 0.0f64);
+    let mut worst_vs_best = f64::INFINITY;
+    let mut cases = vec![(0.05, std::f64::consts::FRAC_PI_4, DVec2::ZERO)];
+    for _ in 0..300 {
+        cases.push((
+            r.random_range(0.02..0.06),
+            r.random_range(0.0..std::f64::consts::FRAC_PI_2),
+            DVec2::new(r.random_range(-0.06..0.06), r.random_range(-0.06..0.06)),
+        ));
+    }
+    let mut checked = 0;
+    for (k, &(hu, yaw, off)) in cases.iter().enumerate() {
+        let exact = overlap2(&square(off, yaw, hu), &square(DVec2::ZERO, 0.0, hl));
+        if exact.len() < 3 || shoelace(&exact) < 1e-6 {
+            continue;
+        }
+        checked += 1;
+        let upper = cuboid(DVec3::new(hu, hu, thick));
+        let pu = Pose::new(DQuat::from_rotation_z(yaw), DVec3::new(off.x, off.y, thick));
+        let n = -DVec3::Z;
+        let (all, features, snap) = clip::contact_points(
+            poly(&upper),
+            &pu,
+            poly(&lower),
+            &pl,
+            n,
+            FeaturePair::default(),
+            TOL,
+        )
+        .unwrap();
+        assert!(matches!(
+            (features.a, features.b),
+            (Feature::Face(_), Feature::Face(_))
+        ));
+        let flat: Vec<DVec2> = all.iter().map(|p| p.point_a.truncate()).collect();
+        let area = shoelace(&exact);
+        // Each clipped point is a corner of the exact overlap, and each corner is one of
+        // them; a corner within the merging distance of a side plane is kept where it is,
+        // so positions agree to that distance.
+        assert_eq!(flat.len(), exact.len(), "case {k}: {flat:?} vs {exact:?}");
+        for x in &exact {
+            let d = flat
+                .iter()
+                .map(|y| y.distance(*x))
+                .fold(f64::INFINITY, f64::min);
+            assert!(d <= snap, "case {k}: corner {x} missed by {d}: {flat:?}");
+            worst_corner = worst_corner.max(d);
+        }
+        let area_error = (shoelace(&ccw(flat)) - area).abs() / area;
+        worst_area = worst_area.max(area_error);
+        if k == 0 {
+            assert_eq!(all.len(), 8, "the octagon");
+        }
+        let mut reduced = all.clone();
+        clip::reduce(&mut reduced, n, snap);
+        let m = manifold(&upper, &pu, &lower, &pl).unwrap();
+        assert_eq!(m.points(), &reduced[..], "the manifold is the reduced clip");
+        assert!(m.points().len() <= MAX_POINTS);
+        let kept: Vec<DVec2> = m.points().iter().map(|p| p.point_a.truncate()).collect();
+        for p in m.points() {
+            assert!(p.gap.abs() < EXACT && p.point_b.z.abs() < EXACT);
+            let x = p.point_a.truncate();
+            assert!(inside2(&square(off, yaw, hu), x, snap));
+            assert!(inside2(&square(DVec2::ZERO, 0.0, hl), x, snap));
+        }
+        let fraction = if kept.len() < 3 {
+            0.0
+        } else {
+            shoelace(&ccw(kept)) / area
+        };
+        if k == 0 {
+            assert!((fraction - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-9);
+        }
+        worst = worst.min(fraction);
+        // The best four corners (brute force over all subsets).
+        let xs: Vec<DVec2> = all.iter().map(|p| p.point_a.truncate()).collect();
+        let mut best = 0.0f64;
+        for i in 0..xs.len() {
+            for j in i + 1..xs.len() {
+                for k in j + 1..xs.len() {
+                    for l in k + 1..xs.len() {
+                        best = best.max(shoelace(&ccw(vec![xs[i], xs[j], xs[k], xs[l]])));
+                    }
+                }
+            }
+        }
+        if xs.len() >= 4 {
+            worst_vs_best = worst_vs_best.min(fraction * area / best);
+        }
+    }
+    assert!(checked > 200, "{checked}");
+    println!(
+        "{checked} overlaps: corners within {worst_corner:.1e} m, area within {worst_area:.1e} \
+         (relative) before reduction; at least {worst:.4} of the area kept after, {worst_vs_best:.4} of the best four's"
+    );
+    assert!(
+        worst >= AREA_KEPT_MIN,
+        "kept only {worst} of the overlap area"
+    );
+    assert!(
+        worst_vs_best >= 1.0 - 1e-12,
+        "{worst_vs_best} of the best four's area"
+    );
+}
+
+/// A box tilted by θ about its long axis onto the floor: two points at the ends of its low
+/// edge (edge on face), at the analytic gap; tilted so little that the whole face is within
+/// the tolerance: four points, the high edge's gap larger by 2·h_y·sin θ.
+#[test]
+fn a_tilted_box_rests_on_its_low_edge() {
+    let (fl, pf) = floor();
+    let h = DVec3::new(0.05, 0.04, 0.02);
+    let bx = cuboid(h);
+    let top = face_along(&fl, DVec3::Z);
+    let rise = |t: f64| 2.0 * h.y * t.sin();
+    // θ with 2 h_y sin θ = TOL/2: the whole face is within the tolerance.
+    let small = (0.25 * TOL / h.y).asin();
+    for (theta, gap) in [
+        (0.01, 0.0),
+        (0.1, 0.4 * TOL),
+        (0.5, -0.3 * TOL),
+        (small, 0.2 * TOL),
+    ] {
+        let q = DQuat::from_rotation_x(theta);
+        let (s, c) = theta.sin_cos();
+        let centre = DVec3::new(0.1, 0.2, h.y * s + h.z * c + gap);
+        let pb = Pose::new(q, centre);
+        let m = manifold(&bx, &pb, &fl, &pf).unwrap();
+        let low_y = centre.y - h.y * c + h.z * s;
+        let mut want = vec![
+            (DVec3::new(centre.x - h.x, low_y, gap), gap),
+            (DVec3::new(centre.x + h.x, low_y, gap), gap),
+        ];
+        if theta == small {
+            assert_eq!(m.features.a, face_along(&bx, -DVec3::Z));
+            let high_y = centre.y + h.y * c + h.z * s;
+            let g = gap + rise(theta);
+            want.push((DVec3::new(centre.x - h.x, high_y, g), g));
+            want.push((DVec3::new(centre.x + h.x, high_y, g), g));
+        } else {
+            assert!(matches!(m.features.a, Feature::Edge(_)), "{m:?}");
+        }
+        assert_eq!(m.features.b, top);
+        assert_eq!(m.points().len(), want.len(), "θ {theta}: {m:?}");
+        for (x, g) in want {
+            let p = m
+                .points()
+                .iter()
+                .find(|p| p.point_a.distance(x) < EXACT)
+                .unwrap_or_else(|| panic!("θ {theta}: no point at {x}: {m:?}"));
+            assert!((p.gap - g).abs() < EXACT, "θ {theta}: {} vs {g}", p.gap);
+            assert!(p.point_b.distance(DVec3::new(x.x, x.y, 0.0)) < EXACT);
+            assert_eq!(p.id.b, top);
+            assert!(vertex_at(&bx, &pb, p.id.a).distance(p.point_a) < EXACT);
+        }
+    }
+}
+
+/// A cube balanced on an edge: the edge's two ends; on a vertex (a body diagonal vertical):
+/// that vertex alone. Just touching and at a small gap.
+#[test]
+fn a_cube_balanced_on_an_edge_and_on_a_vertex() {
+    let (fl, pf) = floor();
+    let h = 0.05;
+    let cube = cuboid(DVec3::splat(h));
+    for gap in [0.0, 0.5 * TOL] {
+        let q = DQuat::from_rotation_y(std::f64::consts::FRAC_PI_4);
+        let pb = Pose::new(q, DVec3::new(0.0, 0.1, h * 2f64.sqrt() + gap));
+        let m = manifold(&cube, &pb, &fl, &pf).unwrap();
+        assert!(matches!(m.features.a, Feature::Edge(_)), "{m:?}");
+        assert_eq!(m.points().len(), 2);
+        for y in [0.1 - h, 0.1 + h] {
+            let x = DVec3::new(0.0, y, gap);
+            assert!(
+                m.points().iter().any(|p| p.point_a.distance(x) < EXACT
+                    && (p.gap - gap).abs() < EXACT
+                    && p.point_b.distance(DVec3::new(0.0, y, 0.0)) < EXACT),
+                "{x}: {m:?}"
+            );
+        }
+        let corner = DVec3::splat(-h);
+        let q = DQuat::from_rotation_arc(corner.normalize(), -DVec3::Z);
+        let pb = Pose::new(q, DVec3::new(0.2, 0.0, h * 3f64.sqrt() + gap));
+        let m = manifold(&cube, &pb, &fl, &pf).unwrap();
+        assert_eq!(m.points().len(), 1, "{m:?}");
+        let p = m.points()[0];
+        assert!(matches!(m.features.a, Feature::Vertex(_)));
+        assert!(
+            p.point_a.distance(DVec3::new(0.2, 0.0, gap)) < EXACT,
+            "{p:?}"
+        );
+        assert!(p.point_b.distance(DVec3::new(0.2, 0.0, 0.0)) < EXACT);
+        assert!((p.gap - gap).abs() < EXACT);
+    }
+}
+
+/// Degenerate input: faces tilted by 1e-12, a block exactly on an equal block (every corner
+/// on a corner, also turned by a right angle), a block edge to edge beside another (an
+/// overlap of zero area), and a sliver face down: finite points on both surfaces, one per
+/// corner, never more than four, no panic.
+#[test]
+fn degenerate_contacts_give_clean_points() {
+    let (fl, pf) = floor();
+    let h = DVec3::new(0.05, 0.05, 0.025);
+    let bx = cuboid(h);
+    let finite = |m: &Manifold| {
+        m.points()
+            .iter()
+            .all(|p| p.point_a.is_finite() && p.point_b.is_finite() && p.gap.is_finite())
+            && m.normal.is_finite()
+    };
+    // Tilted by 1e-12 about x: four corners, gaps within 1e-12·h of zero.
+    let pb = Pose::new(DQuat::from_rotation_x(1e-12), DVec3::new(0.0, 0.0, h.z));
+    let m = manifold(&bx, &pb, &fl, &pf).unwrap();
+    assert!(finite(&m));
+    assert_eq!(m.points().len(), 4);
+    assert!(m.points().iter().all(|p| p.gap.abs() < EXACT));
+    // An equal block exactly on top, also turned by 90°: four points, one per corner, four
+    // distinct ids.
+    let pl = Pose::from_translation(DVec3::new(0.0, 0.0, -h.z));
+    for yaw in [0.0, std::f64::consts::FRAC_PI_2, std::f64::consts::PI] {
+        let pu = Pose::new(DQuat::from_rotation_z(yaw), DVec3::new(0.0, 0.0, h.z));
+        let m = manifold(&bx, &pu, &bx, &pl).unwrap();
+        assert!(finite(&m));
+        assert_eq!(m.points().len(), 4, "yaw {yaw}: {m:?}");
+        for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            let c = DVec3::new(x * h.x, y * h.y, 0.0);
+            assert!(
+                m.points()
+                    .iter()
+                    .any(|p| p.point_a.distance(c) < EXACT && p.point_b.distance(c) < EXACT)
+            );
+        }
+        let mut ids: Vec<FeaturePair> = m.points().iter().map(|p| p.id).collect();
+        ids.sort_by_key(|i| (i.a, i.b));
+        ids.dedup();
+        assert_eq!(ids.len(), 4);
+    }
+    // Beside it, edge on edge: the faces overlap along a segment only (zero area): its two
+    // ends.
+    for dx in [2.0 * h.x, 2.0 * h.x * (1.0 - 1e-15)] {
+        let pu = Pose::from_translation(DVec3::new(dx, 0.3 * h.y, h.z));
+        let m = manifold(&bx, &pu, &bx, &pl).unwrap();
+        assert!(finite(&m));
+        assert_eq!(m.points().len(), 2, "{m:?}");
+        for y in [-0.7 * h.y, h.y] {
+            let c = DVec3::new(h.x, y, 0.0);
+            assert!(
+                m.points().iter().any(|p| p.point_a.distance(c) < 1e-9),
+                "{c}: {m:?}"
+            );
+        }
+    }
+    // A tetrahedron resting on a sliver face (1e-6 wide): its three corners.
+    let sliver = Convex::Polyhedron(
+        ConvexPolyhedron::hull(&[
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(0.1, 0.0, 0.0),
+            DVec3::new(0.05, 1e-6, 0.0),
+            DVec3::new(0.03, 0.03, 0.1),
+        ])
+        .unwrap(),
+    );
+    for tilt in [0.0, 1e-12] {
+        let ps = Pose::new(DQuat::from_rotation_y(tilt), DVec3::ZERO);
+        let m = manifold(&sliver, &ps, &fl, &pf).unwrap();
+        assert!(finite(&m));
+        assert!(!m.points().is_empty() && m.points().len() <= 3, "{m:?}");
+        assert!(m.points().iter().all(|p| p.gap.abs() < 1e-12));
+    }
+}
+
+/// A random convex hull of 6–20 points, 0.2–2 across.
+fn random_hull(r: &mut rand::rngs::Xoshiro256PlusPlus) -> ConvexPolyhedron {
+    let scale = DVec3::new(
+        r.random_range(0.1..1.0),
+        r.random_range(0.1..1.0),
+        r.random_range(0.1..1.0),
+    );
+    loop {
+        let count = r.random_range(6..=20);
+        let pts: Vec<DVec3> = (0..count)
+            .map(|_| {
+                DVec3::new(
+                    r.random_range(-1.0..1.0),
+                    r.random_range(-1.0..1.0),
+                    r.random_range(-1.0..1.0),
+                ) * scale
+            })
+            .collect();
+        if let Ok(p) = ConvexPolyhedron::hull(&pts) {
+            return p;
+        }
+    }
+}
+
+/// Random convex hulls brought to a random gap in [−TOL/2, TOL] (separated or overlapping),
+/// half of them face to face (a face of `b` turned against a face of `a`), checked by brute
+/// force: every point lies on both surfaces (within the merging distance for a projected
+/// point), its gap is `(point_b − point_a)·n` and at least minus the penetration depth (the
+/// separating-axis test), the deepest gap is the pair's gap along the normal (from all
+/// vertices), the normal is the brute-force closest points' direction (separated) or a
+/// least-overlap axis (overlapping), ids are distinct. Several kinds of contact occur.
+#[test]
+fn random_hulls_against_brute_force() {
+    let mut r = rng(7);
+    let mut kinds = std::collections::BTreeSet::new();
+    let mut counts = [0usize; MAX_POINTS + 1];
+    let (mut worst_excess, mut shallow) = (0.0f64, 0);
+    let kind = |f: Feature| match f {
+        Feature::Vertex(_) => 'v',
+        Feature::Edge(_) => 'e',
+        Feature::Face(_) => 'f',
+    };
+    for case in 0..400 {
+        let (a, b) = (random_hull(&mut r), random_hull(&mut r));
+        let pa = Pose::new(random_rotation(&mut r), DVec3::ZERO);
+        let mut pb = if case % 2 == 0 {
+            Pose::new(random_rotation(&mut r), unit_vector(&mut r) * 4.0)
+        } else {
+            // Face to face: b's face g turned against a's face f, offset a little sideways.
+            let f = r.random_range(0..a.face_count() as u32);
+            let g = r.random_range(0..b.face_count() as u32);
+            let m = pa.rotation * a.face_plane(f).normal;
+            let q = DQuat::from_rotation_arc(b.face_plane(g).normal, -m);
+            let spin = DQuat::from_axis_angle(m, r.random_range(0.0..6.3));
+            let centre = |p: &ConvexPolyhedron, f: u32| {
+                p.face_vertices(f)
+                    .iter()
+                    .map(|&v| p.vertex(v))
+                    .sum::<DVec3>()
+                    / p.face_vertices(f).len() as f64
+            };
+            let rot = spin * q;
+            let side = unit_vector(&mut r).reject_from(m) * 0.05;
+            let t = pa.transform_point(centre(&a, f)) - rot * centre(&b, g) + m * 2.0 + side;
+            Pose::new(rot, t)
+        };
+        let c = brute::closest(&a, &pa, &b, &pb);
+        let dir = (c.point_b - c.point_a).normalize();
+        let gap = r.random_range(-0.5 * TOL..TOL);
+        pb.translation -= dir * (c.distance - gap);
+        let (ca, cb) = (Convex::Polyhedron(a.clone()), Convex::Polyhedron(b.clone()));
+        let m = manifold(&ca, &pa, &cb, &pb).unwrap();
+        let n = m.normal;
+        let sep = brute::sat_separation(&a, &pa, &b, &pb);
+        let world = |p: &ConvexPolyhedron, pose: &Pose| -> Vec<f64> {
+            p.vertices()
+                .iter()
+                .map(|&v| pose.transform_point(v).dot(n))
+                .collect()
+        };
+        let along = world(&b, &pb).into_iter().fold(f64::INFINITY, f64::min)
+            - world(&a, &pa).into_iter().fold(f64::NEG_INFINITY, f64::max);
+        if sep > NORMAL_FROM_POINTS_FRACTION * TOL {
+            let d = brute::closest(&a, &pa, &b, &pb);
+            let want = (d.point_b - d.point_a).normalize();
+            assert!(
+                n.cross(want).length() < 1e-8 && n.dot(want) > 0.0,
+                "case {case}: {n} vs {want}"
+            );
+        } else {
+            assert!((along - sep).abs() < 1e-12, "case {case}: {along} vs {sep}");
+        }
+        let on = |p: &ConvexPolyhedron, pose: &Pose, x: DVec3| {
+            p.max_plane_distance(pose.inverse_transform_point(x)).abs()
+        };
+        let slack = POINT_MERGE_FRACTION * TOL + 1e-12;
+        for p in m.points() {
+            assert!(on(&a, &pa, p.point_a) <= slack, "case {case}: {p:?}");
+            assert!(on(&b, &pb, p.point_b) <= slack, "case {case}: {p:?}");
+            assert!(((p.point_b - p.point_a).dot(n) - p.gap).abs() < EXACT);
+            assert!(
+                p.gap >= sep.min(0.0) - 1e-12,
+                "case {case}: {} < {sep}",
+                p.gap
+            );
+            assert!(p.gap <= TOL);
+        }
+        assert!(
+            m.min_gap() >= along - 1e-12,
+            "case {case}: {} < {along}",
+            m.min_gap()
+        );
+        let excess = m.min_gap() - along;
+        worst_excess = worst_excess.max(excess);
+        if excess > 1e-12 {
+            shallow += 1;
+        }
+        let mut ids: Vec<(Feature, Feature)> =
+            m.points().iter().map(|p| (p.id.a, p.id.b)).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        assert_eq!(ids.len(), m.points().len(), "case {case}: {m:?}");
+        kinds.insert((kind(m.features.a), kind(m.features.b)));
+        counts[m.points().len()] += 1;
+    }
+    println!(
+        "kinds {kinds:?}, point counts {counts:?}; deepest point above the pair's gap in \
+         {shallow} cases, by at most {worst_excess:.2e}"
+    );
+    assert!(kinds.len() >= 5, "{kinds:?}");
+    assert!(counts[1] > 0 && counts[3] + counts[4] > 0, "{counts:?}");
+    assert!(worst_excess <= TOL);
+}
+
+/// A sphere on the floor (touching, apart, sunk; either order): the point straight below its
+/// centre; against a box's edge: the edge point and the sphere's point on the line to it;
+/// two spheres: the line of centres.
+#[test]
+fn spheres_touch_at_one_point() {
+    let (fl, pf) = floor();
+    let r = 0.1;
+    let ball = Convex::Sphere(Sphere::new(r).unwrap());
+    let top = face_along(&fl, DVec3::Z);
+    for gap in [0.0, 0.5 * TOL, -0.3 * TOL] {
+        let c = DVec3::new(0.2, -0.1, r + gap);
+        let ps = Pose::from_translation(c);
+        for ball_first in [true, false] {
+            let m = if ball_first {
+                manifold(&ball, &ps, &fl, &pf)
+            } else {
+                manifold(&fl, &pf, &ball, &ps)
+            }
+            .unwrap();
+            assert_eq!(m.points().len(), 1);
+            let p = m.points()[0];
+            let (on_ball, on_floor, ids) = if ball_first {
+                (p.point_a, p.point_b, (p.id.a, p.id.b))
+            } else {
+                (p.point_b, p.point_a, (p.id.b, p.id.a))
+            };
+            assert!(on_ball.distance(DVec3::new(c.x, c.y, gap)) < EXACT, "{m:?}");
+            assert!(on_floor.distance(DVec3::new(c.x, c.y, 0.0)) < EXACT);
+            assert!((p.gap - gap).abs() < EXACT);
+            assert_eq!(ids, (Feature::Vertex(0), top));
+        }
+    }
+    // Against the edge x = z = 0.5 of a unit cube.
+    let cube = cuboid(DVec3::splat(0.5));
+    let d = DVec3::new(1.0, 0.0, 1.0).normalize();
+    let edge_point = DVec3::new(0.5, 0.1, 0.5);
+    for gap in [0.0, 0.7 * TOL, -0.2 * TOL] {
+        let ps = Pose::from_translation(edge_point + d * (r + gap));
+        let m = manifold(&ball, &ps, &cube, &Pose::IDENTITY).unwrap();
+        let p = m.points()[0];
+        assert!((m.normal + d).length() < 1e-9, "{m:?}");
+        assert!(p.point_b.distance(edge_point) < 1e-9, "{p:?}");
+        assert!(p.point_a.distance(edge_point + d * gap) < 1e-9);
+        assert!((p.gap - gap).abs() < 1e-12);
+        assert!(matches!(m.features.b, Feature::Edge(_)));
+    }
+    let m = manifold(
+        &ball,
+        &Pose::IDENTITY,
+        &Convex::Sphere(Sphere::new(0.2).unwrap()),
+        &Pose::from_translation(DVec3::new(0.0, 0.3 + 0.5 * TOL, 0.0)),
+    )
+    .unwrap();
+    let p = m.points()[0];
+    assert!((p.gap - 0.5 * TOL).abs() < EXACT);
+    assert!(p.point_a.distance(DVec3::new(0.0, r, 0.0)) < EXACT);
+    assert!(p.point_b.distance(DVec3::new(0.0, r + 0.5 * TOL, 0.0)) < EXACT);
+}
+
+/// An ellipsoid resting on the floor, tilted: its lowest point from the closed form (body
+/// frame: A²d/|Ad| for the downward direction d, A the semi-axes), the floor's straight below;
+/// an ellipsoid against a sphere along its long axis: gap d − a − r.
+#[test]
+fn ellipsoids_touch_at_one_point() {
+    let (fl, pf) = floor();
+    let axes = DVec3::new(0.1, 0.03, 0.02);
+    let e = Convex::Ellipsoid(Ellipsoid::new(axes).unwrap());
+    for (tilt, gap) in [(0.0, 0.0), (0.4, 0.5 * TOL), (1.1, -0.4 * TOL)] {
+        let q = DQuat::from_rotation_z(0.3) * DQuat::from_rotation_x(tilt);
+        let d = q.inverse() * -DVec3::Z;
+        let low = q * (axes * axes * d / (axes * d).length());
+        let c = DVec3::new(0.1, 0.05, -low.z + gap);
+        let pe = Pose::new(q, c);
+        let m = manifold(&e, &pe, &fl, &pf).unwrap();
+        let p = m.points()[0];
+        assert_eq!(m.points().len(), 1);
+        assert!(p.point_a.distance(c + low) < 1e-12, "{p:?} vs {}", c + low);
+        assert!(
+            p.point_b
+                .distance(DVec3::new(c.x + low.x, c.y + low.y, 0.0))
+                < 1e-12
+        );
+        assert!((p.gap - gap).abs() < 1e-12);
+    }
+    let s = Convex::Sphere(Sphere::new(0.05).unwrap());
+    for gap in [0.3 * TOL, -0.3 * TOL] {
+        let ps = Pose::from_translation(DVec3::new(0.15 + gap, 0.0, 0.0));
+        let m = manifold(&e, &Pose::IDENTITY, &s, &ps).unwrap();
+        let p = m.points()[0];
+        assert!((p.gap - gap).abs() < 1e-12, "{p:?}");
+        assert!(p.point_a.distance(DVec3::new(0.1, 0.0, 0.0)) < 1e-12);
+        assert!(p.point_b.distance(DVec3::new(0.1 + gap, 0.0, 0.0)) < 1e-12);
+    }
+}
+
+/// An L-shaped compound of two bars lying on the floor: one manifold per bar, each its four
+/// bottom corners; raised on one end beyond the tolerance, only the other bar's.
+#[test]
+fn a_compound_has_a_manifold_per_touching_piece() {
+    let (fl, pf) = floor();
+    let floor_shape = Shape::compound(vec![(pf, fl)]).unwrap();
+    let bar = |h: DVec3| cuboid(h);
+    let l = Shape::compound(vec![
+        (Pose::IDENTITY, bar(DVec3::new(0.2, 0.02, 0.02))),
+        (
+            Pose::from_translation(DVec3::new(-0.18, 0.12, 0.0)),
+            bar(DVec3::new(0.02, 0.1, 0.02)),
+        ),
+    ])
+    .unwrap();
+    let mut cache = ManifoldCache::default();
+    let pl = Pose::from_translation(DVec3::new(0.0, 0.0, 0.02));
+    let ms = shape_manifolds(&l, &pl, &floor_shape, &Pose::IDENTITY, TOL, &mut cache).unwrap();
+    assert_eq!(ms.len(), 2);
+    assert_eq!((ms[0].pieces, ms[1].pieces), ((0, 0), (1, 0)));
+    for m in &ms {
+        assert_eq!(m.points().len(), 4);
+        assert!(
+            m.points()
+                .iter()
+                .all(|p| p.gap.abs() < EXACT && p.point_a.z.abs() < EXACT)
+        );
+    }
+    // Tilted about the long bar's far end: the upright bar lifts off.
+    let q = DQuat::from_rotation_y(0.01);
+    let pivot = DVec3::new(0.2, 0.0, 0.0);
+    let pt = Pose::new(q, pivot - q * (pivot - DVec3::new(0.0, 0.0, 0.02)));
+    let ms = shape_manifolds(&l, &pt, &floor_shape, &Pose::IDENTITY, TOL, &mut cache).unwrap();
+    assert_eq!(ms.len(), 1, "{ms:?}");
+    assert_eq!(ms[0].pieces, (0, 0));
+    assert_eq!(ms[0].points().len(), 2);
+}
+
+/// Coherence: a box lying on the floor, a 45°-turned block offset on another (points where
+/// edges cross), and a box on its low edge each slide and turn a little between two steps:
+/// every new point keeps its old id, is matched to the old point by it, and that old point is
+/// the same material point of the moving body (carried by the motion to within 1e-12).
+#[test]
+fn sliding_and_turning_keeps_the_ids() {
+    let (fl, pf) = floor();
+    let bx = cuboid(DVec3::new(0.1, 0.05, 0.02));
+    let block = cuboid(DVec3::new(0.05, 0.05, 0.025));
+    let pl = Pose::from_translation(DVec3::new(0.0, 0.0, -0.025));
+    let cases = [
+        (
+            &bx,
+            Pose::new(DQuat::from_rotation_z(0.3), DVec3::new(0.1, 0.0, 0.02)),
+            &fl,
+            pf,
+            4,
+        ),
+        (
+            &block,
+            Pose::new(
+                DQuat::from_rotation_z(std::f64::consts::FRAC_PI_4),
+                DVec3::new(0.03, 0.01, 0.025),
+            ),
+            &block,
+            pl,
+            4,
+        ),
+        (
+            &bx,
+            Pose::new(
+                DQuat::from_rotation_x(0.2),
+                DVec3::new(0.0, 0.0, 0.05 * 0.2f64.sin() + 0.02 * 0.2f64.cos()),
+            ),
+            &fl,
+            pf,
+            2,
+        ),
+    ];
+    for (k, (a, p0, b, pb, count)) in cases.into_iter().enumerate() {
+        let step = Pose::new(DQuat::from_rotation_z(0.01), DVec3::new(1e-3, -5e-4, 0.0));
+        // The motion turns about the body's own vertical through its centre.
+        let p1 = Pose::new(
+            step.rotation * p0.rotation,
+            p0.translation + step.translation,
+        );
+        let m0 = manifold(a, &p0, b, &pb).unwrap();
+        let m1 = manifold(a, &p1, b, &pb).unwrap();
+        assert_eq!(m0.points().len(), count, "case {k}: {m0:?}");
+        assert_eq!(m1.points().len(), count, "case {k}: {m1:?}");
+        let matched = match_points(&m0, &m1, TOL);
+        for (i, p) in m1.points().iter().enumerate() {
+            let j = matched[i].unwrap_or_else(|| panic!("case {k}: point {i} unmatched"));
+            let old = m0.points()[j];
+            assert_eq!(old.id, p.id, "case {k}");
+            if let Feature::Vertex(_) = p.id.a {
+                let carried = p1.transform_point(p0.inverse_transform_point(old.point_a));
+                assert!(
+                    carried.distance(p.point_a) < 1e-12,
+                    "case {k}: {carried} vs {p:?}"
+                );
+            }
+        }
+    }
+}
+
+/// Bad input is refused with a typed error, never a panic or NaN.
+#[test]
+fn bad_input_is_refused() {
+    let (fl, pf) = floor();
+    let bx = cuboid(DVec3::splat(0.05));
+    let pb = Pose::from_translation(DVec3::new(0.0, 0.0, 0.05));
+    let c = shape::convex_closest(&bx, &pb, &fl, &pf, FeaturePair::default());
+    for t in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(matches!(
+            convex_manifold(&bx, &pb, &fl, &pf, &c, t),
+            Err(ManifoldError::Tolerance(_))
+        ));
+    }
+    let bad = Pose::from_translation(DVec3::new(f64::NAN, 0.0, 0.0));
+    assert_eq!(
+        convex_manifold(&bx, &bad, &fl, &pf, &c, TOL),
+        Err(ManifoldError::NonFinitePose)
+    );
+    for n in [DVec3::ZERO, DVec3::NAN] {
+        assert!(matches!(
+            manifold_along(&bx, &pb, &fl, &pf, n, FeaturePair::default(), TOL),
+            Err(ManifoldError::Normal(_))
+        ));
+    }
+    // A normal that makes no sense for the pair (sideways) still gives finite points on both
+    // bodies, or none.
+    let m = manifold_along(&bx, &pb, &fl, &pf, DVec3::X, FeaturePair::default(), TOL).unwrap();
+    assert!(m.is_none_or(|m| {
+        m.points()
+            .iter()
+            .all(|p| p.point_a.is_finite() && p.gap.is_finite())
+    }));
+}
