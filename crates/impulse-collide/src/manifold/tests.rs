@@ -57,6 +57,64 @@ fn vertex_at(c: &Convex, pose: &Pose, f: Feature) -> DVec3 {
     pose.transform_point(poly(c).vertex(v))
 }
 
+/// How far `x` (world) lies from feature `f` of polyhedron `c` placed at `pose`: the distance
+/// to a vertex, to an edge's segment, or to a face's polygon (its plane, and outside its
+/// edges).
+fn off_feature(c: &Convex, pose: &Pose, f: Feature, x: DVec3) -> f64 {
+    let p = poly(c);
+    let at = |v: u32| pose.transform_point(p.vertex(v));
+    match f {
+        Feature::Vertex(v) => at(v).distance(x),
+        Feature::Edge(e) => {
+            let ed = p.edge(e);
+            let (t, h) = (at(ed.tail), at(ed.head));
+            let s = ((x - t).dot(h - t) / (h - t).length_squared()).clamp(0.0, 1.0);
+            (t + (h - t) * s).distance(x)
+        }
+        Feature::Face(g) => {
+            let m = pose.transform_vector(p.face_plane(g).normal);
+            let loop_ = p.face_vertices(g);
+            let outside = (0..loop_.len())
+                .map(|k| {
+                    let (u, w) = (at(loop_[k]), at(loop_[(k + 1) % loop_.len()]));
+                    (w - u).cross(m).normalize().dot(x - u)
+                })
+                .fold(0.0, f64::max);
+            outside.max((x - at(loop_[0])).dot(m).abs())
+        }
+    }
+}
+
+/// Every point's id names features that hold it: `point_a` on `id.a` of `a`, `point_b` on
+/// `id.b` of `b`, within `slack`; and no two points share an id.
+fn check_ids(m: &Manifold, a: &Convex, pa: &Pose, b: &Convex, pb: &Pose, slack: f64) {
+    for p in m.points() {
+        assert!(
+            off_feature(a, pa, p.id.a, p.point_a) <= slack,
+            "{:?} does not hold {}: {m:?}",
+            p.id.a,
+            p.point_a
+        );
+        assert!(
+            off_feature(b, pb, p.id.b, p.point_b) <= slack,
+            "{:?} does not hold {}: {m:?}",
+            p.id.b,
+            p.point_b
+        );
+    }
+    let mut ids: Vec<(Feature, Feature)> = m.points().iter().map(|p| (p.id.a, p.id.b)).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    assert_eq!(ids.len(), m.points().len(), "repeated ids: {m:?}");
+}
+
+/// The merging distance the manifold uses for `a` and `b` at the tests' tolerance.
+fn snap_of(a: &Convex, b: &Convex) -> f64 {
+    (POINT_MERGE_FRACTION * TOL)
+        .max(poly(a).tolerance())
+        .max(poly(b).tolerance())
+}
+
 /// A box resting on a larger one face to face (just touching, a gap, a small overlap; any
 /// yaw; either body first): four points exactly at the small box's bottom corners, each named
 /// by its corner and the floor's top face, the floor's point straight below it, the gap the
@@ -111,6 +169,11 @@ fn a_box_on_a_larger_box_is_held_at_its_four_corners() {
             }
             seen.sort_unstable();
             assert_eq!(seen, [0, 1, 2, 3]);
+            if box_first {
+                check_ids(&m, &bx, &pb, &fl, &pf, EXACT);
+            } else {
+                check_ids(&m, &fl, &pf, &bx, &pb, EXACT);
+            }
         }
     }
     let high = Pose::from_translation(DVec3::new(0.0, 0.0, h.z + 2.0 * TOL));
@@ -262,6 +325,7 @@ fn turned_and_offset_blocks_keep_the_overlap_area() {
         clip::reduce(&mut reduced, n, snap);
         let m = manifold(&upper, &pu, &lower, &pl).unwrap();
         assert_eq!(m.points(), &reduced[..], "the manifold is the reduced clip");
+        check_ids(&m, &upper, &pu, &lower, &pl, snap);
         assert!(m.points().len() <= MAX_POINTS);
         let kept: Vec<DVec2> = m.points().iter().map(|p| p.point_a.truncate()).collect();
         for p in m.points() {
@@ -349,6 +413,7 @@ fn a_tilted_box_rests_on_its_low_edge() {
         }
         assert_eq!(m.features.b, top);
         assert_eq!(m.points().len(), want.len(), "θ {theta}: {m:?}");
+        check_ids(&m, &bx, &pb, &fl, &pf, EXACT);
         for (x, g) in want {
             let p = m
                 .points()
@@ -360,6 +425,83 @@ fn a_tilted_box_rests_on_its_low_edge() {
             assert_eq!(p.id.b, top);
             assert!(vertex_at(&bx, &pb, p.id.a).distance(p.point_a) < EXACT);
         }
+    }
+}
+
+/// A tilted box whose low edge runs off the side of a table: the edge is cut at the table's
+/// edge, that point named by the two edges, the other end by the box's corner; a box edge
+/// resting across another box's edge (crossed): one point where they cross; along it
+/// (parallel, both boxes turned 45° about x): the two ends of their common stretch.
+#[test]
+fn edges_cut_at_a_side_cross_and_lie_along() {
+    let table = cuboid(DVec3::new(0.1, 0.1, 0.05));
+    let pt = Pose::from_translation(DVec3::new(0.0, 0.0, -0.05));
+    let h = DVec3::new(0.05, 0.04, 0.02);
+    let bx = cuboid(h);
+    let theta: f64 = 0.3;
+    let (s, c) = theta.sin_cos();
+    let centre = DVec3::new(0.08, 0.0, h.y * s + h.z * c);
+    let pb = Pose::new(DQuat::from_rotation_x(theta), centre);
+    let m = manifold(&bx, &pb, &table, &pt).unwrap();
+    assert_eq!(m.points().len(), 2, "{m:?}");
+    check_ids(&m, &bx, &pb, &table, &pt, EXACT);
+    let low_y = -h.y * c + h.z * s;
+    for (x, edge_cut) in [(0.03, false), (0.1, true)] {
+        let p = m
+            .points()
+            .iter()
+            .find(|p| p.point_a.distance(DVec3::new(x, low_y, 0.0)) < EXACT)
+            .unwrap_or_else(|| panic!("no point at x = {x}: {m:?}"));
+        assert_eq!(
+            edge_cut,
+            matches!((p.id.a, p.id.b), (Feature::Edge(_), Feature::Edge(_))),
+            "{p:?}"
+        );
+        assert!(p.gap.abs() < EXACT);
+    }
+    // Crossed: a cube turned 45° about x (its bottom edge along x) on a cube turned 45°
+    // about y (its top edge along y), touching at a gap.
+    let cube = cuboid(DVec3::splat(0.05));
+    let r2 = 0.05 * 2f64.sqrt();
+    let gap = 0.3 * TOL;
+    let lower = Pose::new(
+        DQuat::from_rotation_y(std::f64::consts::FRAC_PI_4),
+        DVec3::new(0.01, 0.0, -r2),
+    );
+    let upper = Pose::new(
+        DQuat::from_rotation_x(std::f64::consts::FRAC_PI_4),
+        DVec3::new(0.0, 0.02, r2 + gap),
+    );
+    let m = manifold(&cube, &upper, &cube, &lower).unwrap();
+    assert_eq!(m.points().len(), 1, "{m:?}");
+    assert!(matches!(
+        (m.features.a, m.features.b),
+        (Feature::Edge(_), Feature::Edge(_))
+    ));
+    let p = m.points()[0];
+    assert!(
+        p.point_a.distance(DVec3::new(0.01, 0.02, gap)) < EXACT,
+        "{p:?}"
+    );
+    assert!(p.point_b.distance(DVec3::new(0.01, 0.02, 0.0)) < EXACT);
+    assert!((p.gap - gap).abs() < EXACT);
+    check_ids(&m, &cube, &upper, &cube, &lower, EXACT);
+    // Parallel: both turned 45° about x, the upper shifted 0.03 along x: the common stretch
+    // x ∈ [−0.02, 0.05].
+    let q = DQuat::from_rotation_x(std::f64::consts::FRAC_PI_4);
+    let lower = Pose::new(q, DVec3::new(0.0, 0.0, -r2));
+    let upper = Pose::new(q, DVec3::new(0.03, 0.0, r2 + gap));
+    let m = manifold(&cube, &upper, &cube, &lower).unwrap();
+    assert_eq!(m.points().len(), 2, "{m:?}");
+    check_ids(&m, &cube, &upper, &cube, &lower, EXACT);
+    for x in [-0.02, 0.05] {
+        assert!(
+            m.points()
+                .iter()
+                .any(|p| p.point_b.distance(DVec3::new(x, 0.0, 0.0)) < EXACT
+                    && (p.gap - gap).abs() < EXACT),
+            "{x}: {m:?}"
+        );
     }
 }
 
@@ -438,10 +580,13 @@ fn degenerate_contacts_give_clean_points() {
                     .any(|p| p.point_a.distance(c) < EXACT && p.point_b.distance(c) < EXACT)
             );
         }
-        let mut ids: Vec<FeaturePair> = m.points().iter().map(|p| p.id).collect();
-        ids.sort_by_key(|i| (i.a, i.b));
-        ids.dedup();
-        assert_eq!(ids.len(), 4);
+        check_ids(&m, &bx, &pu, &bx, &pl, EXACT);
+        // Corner on corner: each named by a corner, never by edges crossing at it (which
+        // rounding would otherwise decide).
+        assert!(m.points().iter().all(|p| matches!(
+            (p.id.a, p.id.b),
+            (Feature::Vertex(_), Feature::Face(_)) | (Feature::Face(_), Feature::Vertex(_))
+        )));
     }
     // Beside it, edge on edge: the faces overlap along a segment only (zero area): its two
     // ends.
@@ -594,11 +739,7 @@ fn random_hulls_against_brute_force() {
         if excess > 1e-12 {
             shallow += 1;
         }
-        let mut ids: Vec<(Feature, Feature)> =
-            m.points().iter().map(|p| (p.id.a, p.id.b)).collect();
-        ids.sort_unstable();
-        ids.dedup();
-        assert_eq!(ids.len(), m.points().len(), "case {case}: {m:?}");
+        check_ids(&m, &ca, &pa, &cb, &pb, snap_of(&ca, &cb));
         kinds.insert((kind(m.features.a), kind(m.features.b)));
         counts[m.points().len()] += 1;
     }
