@@ -795,4 +795,22 @@ mod tests {
         let f = support_feature(&bx, dir, Feature::Vertex(0), tol).feature;
         assert_eq!(f, Feature::Vertex(bx.support(dir)));
     }
+
+    /// A sliver face (1e-6 wide) seen edge-on lies within the tolerance of the support plane
+    /// but faces away from the direction by 90°: it is an edge contact, not a face one (no
+    /// projection onto its plane along the direction exists).
+    #[test]
+    fn a_face_seen_edge_on_is_an_edge() {
+        let sliver = ConvexPolyhedron::hull(&[
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(0.1, 0.0, 0.0),
+            DVec3::new(0.05, 1e-6, 0.0),
+            DVec3::new(0.03, 0.03, 0.1),
+        ])
+        .unwrap();
+        let f = support_feature(&sliver, -DVec3::Y, Feature::Vertex(0), 1e-4).feature;
+        let Feature::Edge(e) = f else { panic!("{f:?}") };
+        let ed = sliver.edge(e);
+        assert_eq!(sliver.vertex(ed.tail).y + sliver.vertex(ed.head).y, 0.0);
+    }
 }
