@@ -988,3 +988,60 @@ fn bad_input_is_refused() {
             .all(|p| p.point_a.is_finite() && p.gap.is_finite())
     }));
 }
+
+/// Arbitrary input: random hulls and boxes, far from the origin or not, at random poses close
+/// together, with random normals (most inconsistent with the pair) and random tolerances:
+/// never a panic, a NaN, more than four points, or a point beyond the tolerance; every point
+/// on both surfaces (within the merging distance).
+#[test]
+fn arbitrary_normals_never_panic_or_give_nan() {
+    let mut r = rng(99);
+    let (mut some, mut worst) = (0, 0.0f64);
+    for case in 0..2_000 {
+        let a = random_hull(&mut r);
+        let b = if case % 3 == 0 {
+            primitives::cuboid(DVec3::new(0.3, 0.2, 1e-3)).unwrap()
+        } else {
+            random_hull(&mut r)
+        };
+        let far = if case % 5 == 0 { 1e6 } else { 0.0 };
+        let origin = unit_vector(&mut r) * far;
+        let pa = Pose::new(random_rotation(&mut r), origin);
+        let pb = Pose::new(
+            random_rotation(&mut r),
+            origin + unit_vector(&mut r) * r.random_range(0.0..1.5),
+        );
+        let n = match case % 4 {
+            0 => DVec3::new(1e-300, 0.0, 0.0),
+            _ => unit_vector(&mut r),
+        };
+        let tol = 10f64.powf(r.random_range(-8.0..-1.0));
+        let (ca, cb) = (Convex::Polyhedron(a.clone()), Convex::Polyhedron(b.clone()));
+        let got = manifold_along(&ca, &pa, &cb, &pb, n, FeaturePair::default(), tol);
+        let Ok(Some(m)) = got else {
+            assert!(
+                matches!(got, Ok(None) | Err(ManifoldError::Normal(_))),
+                "{got:?}"
+            );
+            continue;
+        };
+        some += 1;
+        assert!(m.normal.is_finite() && (m.normal.length() - 1.0).abs() < 1e-12);
+        assert!(!m.points().is_empty() && m.points().len() <= MAX_POINTS);
+        let slack = (POINT_MERGE_FRACTION * tol)
+            .max(a.tolerance())
+            .max(b.tolerance())
+            + 1e-15 * far.max(1.0);
+        for p in m.points() {
+            assert!(p.point_a.is_finite() && p.point_b.is_finite() && p.gap <= tol);
+            let on = |q: &ConvexPolyhedron, pose: &Pose, x: DVec3| {
+                q.max_plane_distance(pose.inverse_transform_point(x)).abs()
+            };
+            worst = worst.max(on(&a, &pa, p.point_a) / slack);
+            worst = worst.max(on(&b, &pb, p.point_b) / slack);
+        }
+    }
+    println!("{some} manifolds; points off their surfaces by at most {worst:.3} merging distances");
+    assert!(worst <= 1.0, "{worst}");
+    assert!(some > 200, "{some}");
+}
