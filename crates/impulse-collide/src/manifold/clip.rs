@@ -554,6 +554,10 @@ pub(crate) fn hull_area4(p: [DVec3; 4], n: DVec3) -> f64 {
 /// (at most 495, each a few cross products); above it, a greedy choice with an exchange pass.
 const EXHAUSTIVE_MAX: usize = 12;
 
+/// Relative growth of the hull area below which an exchange of [`reduce`] counts as no gain
+/// (dimensionless, default `1e-12`: rounding of the areas), so the pass cannot cycle.
+const EXCHANGE_GAIN_REL: f64 = 1e-12;
+
 /// Rounds of the exchange pass of [`reduce`] (each replaces at most one kept point by a
 /// better one); it stops earlier when no exchange enlarges the hull.
 const EXCHANGE_ROUNDS: usize = 8;
@@ -640,8 +644,7 @@ pub(crate) fn reduce(points: &mut Vec<ContactPoint>, n: DVec3, snap: f64) {
                         }
                     }
                 }
-                // Strict growth by more than rounding, so the pass cannot cycle.
-                if best <= now * (1.0 + 1e-12) {
+                if best <= now * (1.0 + EXCHANGE_GAIN_REL) {
                     break;
                 }
                 keep = next;
@@ -659,6 +662,9 @@ mod tests {
     use crate::motion::testkit::rng;
     use impulse_geom::primitives;
     use rand::RngExt;
+
+    /// Rounding of areas and ratios of order 1.
+    const ROUNDING: f64 = 1e-12;
 
     /// A point of a flat contact (normal z) at `(x, y)` with gap `gap`, named by `k`.
     fn at(x: f64, y: f64, gap: f64, k: u32) -> ContactPoint {
@@ -738,7 +744,7 @@ mod tests {
             let w = &mut worst[usize::from(count > EXHAUSTIVE_MAX)];
             *w = w.min(got / best);
         }
-        assert!(worst[0] >= 1.0 - 1e-12, "{worst:?}");
+        assert!(worst[0] >= 1.0 - ROUNDING, "{worst:?}");
         assert!(worst[1] >= 0.85, "{worst:?}");
     }
 

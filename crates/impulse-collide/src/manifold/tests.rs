@@ -12,8 +12,13 @@ use rand::RngExt;
 
 /// The contact tolerance of these tests (m; ε_c for bodies of 5–20 cm, thesis §2.2).
 const TOL: f64 = 1e-4;
-/// Agreement with closed forms (m; coordinates of order 0.1–1).
+/// Agreement with closed forms and brute force (m, or dimensionless for ratios and unit
+/// vectors; coordinates of order 0.1–1: a few thousand ulps).
 const EXACT: f64 = 1e-12;
+/// Agreement of a contact normal with the brute-force closest points' direction (unit
+/// vectors, separated by at least [`NORMAL_FROM_POINTS_FRACTION`]·TOL = 1e-7 m: the
+/// direction of points known to ~1e-16 m is good to ~1e-9).
+const DIRECTION: f64 = 1e-8;
 
 fn cuboid(h: DVec3) -> Convex {
     Convex::Polyhedron(primitives::cuboid(h).unwrap())
@@ -38,7 +43,7 @@ fn floor() -> (Convex, Pose) {
 fn face_along(c: &Convex, dir: DVec3) -> Feature {
     let p = poly(c);
     let f = (0..p.face_count() as u32)
-        .find(|&f| p.face_plane(f).normal.dot(dir) > 1.0 - 1e-12)
+        .find(|&f| p.face_plane(f).normal.dot(dir) > 1.0 - EXACT)
         .unwrap();
     Feature::Face(f)
 }
@@ -239,7 +244,7 @@ fn overlap2(p: &[DVec2], q: &[DVec2]) -> Vec<DVec2> {
     }
     let mut unique: Vec<DVec2> = Vec::new();
     for x in pts {
-        if unique.iter().all(|u| u.distance(x) > 1e-12) {
+        if unique.iter().all(|u| u.distance(x) > EXACT) {
             unique.push(x);
         }
     }
@@ -340,7 +345,7 @@ fn turned_and_offset_blocks_keep_the_overlap_area() {
             shoelace(&ccw(kept)) / area
         };
         if k == 0 {
-            assert!((fraction - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-9);
+            assert!((fraction - std::f64::consts::FRAC_1_SQRT_2).abs() < EXACT);
         }
         worst = worst.min(fraction);
         // The best four corners (brute force over all subsets).
@@ -369,7 +374,7 @@ fn turned_and_offset_blocks_keep_the_overlap_area() {
         "kept only {worst} of the overlap area"
     );
     assert!(
-        worst_vs_best >= 1.0 - 1e-12,
+        worst_vs_best >= 1.0 - EXACT,
         "{worst_vs_best} of the best four's area"
     );
 }
@@ -602,7 +607,7 @@ fn degenerate_contacts_give_clean_points() {
         for y in [-0.7 * h.y, h.y] {
             let c = DVec3::new(h.x, y, 0.0);
             assert!(
-                m.points().iter().any(|p| p.point_a.distance(c) < 1e-9),
+                m.points().iter().any(|p| p.point_a.distance(c) < EXACT),
                 "{c}: {m:?}"
             );
         }
@@ -622,7 +627,7 @@ fn degenerate_contacts_give_clean_points() {
         let m = manifold(&sliver, &ps, &fl, &pf).unwrap();
         assert!(finite(&m));
         assert!(!m.points().is_empty() && m.points().len() <= 3, "{m:?}");
-        assert!(m.points().iter().all(|p| p.gap.abs() < 1e-12));
+        assert!(m.points().iter().all(|p| p.gap.abs() < EXACT));
     }
 }
 
@@ -712,35 +717,35 @@ fn random_hulls_against_brute_force() {
             let d = brute::closest(&a, &pa, &b, &pb);
             let want = (d.point_b - d.point_a).normalize();
             assert!(
-                n.cross(want).length() < 1e-8 && n.dot(want) > 0.0,
+                n.cross(want).length() < DIRECTION && n.dot(want) > 0.0,
                 "case {case}: {n} vs {want}"
             );
         } else {
-            assert!((along - sep).abs() < 1e-12, "case {case}: {along} vs {sep}");
+            assert!((along - sep).abs() < EXACT, "case {case}: {along} vs {sep}");
         }
         let on = |p: &ConvexPolyhedron, pose: &Pose, x: DVec3| {
             p.max_plane_distance(pose.inverse_transform_point(x)).abs()
         };
-        let slack = POINT_MERGE_FRACTION * TOL + 1e-12;
+        let slack = POINT_MERGE_FRACTION * TOL + EXACT;
         for p in m.points() {
             assert!(on(&a, &pa, p.point_a) <= slack, "case {case}: {p:?}");
             assert!(on(&b, &pb, p.point_b) <= slack, "case {case}: {p:?}");
             assert!(((p.point_b - p.point_a).dot(n) - p.gap).abs() < EXACT);
             assert!(
-                p.gap >= sep.min(0.0) - 1e-12,
+                p.gap >= sep.min(0.0) - EXACT,
                 "case {case}: {} < {sep}",
                 p.gap
             );
             assert!(p.gap <= TOL);
         }
         assert!(
-            m.min_gap() >= along - 1e-12,
+            m.min_gap() >= along - EXACT,
             "case {case}: {} < {along}",
             m.min_gap()
         );
         let excess = m.min_gap() - along;
         worst_excess = worst_excess.max(excess);
-        if excess > 1e-12 {
+        if excess > EXACT {
             shallow += 1;
         }
         check_ids(&m, &ca, &pa, &cb, &pb, snap_of(&ca, &cb));
@@ -796,10 +801,10 @@ fn spheres_touch_at_one_point() {
         let ps = Pose::from_translation(edge_point + d * (r + gap));
         let m = manifold(&ball, &ps, &cube, &Pose::IDENTITY).unwrap();
         let p = m.points()[0];
-        assert!((m.normal + d).length() < 1e-9, "{m:?}");
-        assert!(p.point_b.distance(edge_point) < 1e-9, "{p:?}");
-        assert!(p.point_a.distance(edge_point + d * gap) < 1e-9);
-        assert!((p.gap - gap).abs() < 1e-12);
+        assert!((m.normal + d).length() < EXACT, "{m:?}");
+        assert!(p.point_b.distance(edge_point) < EXACT, "{p:?}");
+        assert!(p.point_a.distance(edge_point + d * gap) < EXACT);
+        assert!((p.gap - gap).abs() < EXACT);
         assert!(matches!(m.features.b, Feature::Edge(_)));
     }
     let m = manifold(
@@ -832,22 +837,22 @@ fn ellipsoids_touch_at_one_point() {
         let m = manifold(&e, &pe, &fl, &pf).unwrap();
         let p = m.points()[0];
         assert_eq!(m.points().len(), 1);
-        assert!(p.point_a.distance(c + low) < 1e-12, "{p:?} vs {}", c + low);
+        assert!(p.point_a.distance(c + low) < EXACT, "{p:?} vs {}", c + low);
         assert!(
             p.point_b
                 .distance(DVec3::new(c.x + low.x, c.y + low.y, 0.0))
-                < 1e-12
+                < EXACT
         );
-        assert!((p.gap - gap).abs() < 1e-12);
+        assert!((p.gap - gap).abs() < EXACT);
     }
     let s = Convex::Sphere(Sphere::new(0.05).unwrap());
     for gap in [0.3 * TOL, -0.3 * TOL] {
         let ps = Pose::from_translation(DVec3::new(0.15 + gap, 0.0, 0.0));
         let m = manifold(&e, &Pose::IDENTITY, &s, &ps).unwrap();
         let p = m.points()[0];
-        assert!((p.gap - gap).abs() < 1e-12, "{p:?}");
-        assert!(p.point_a.distance(DVec3::new(0.1, 0.0, 0.0)) < 1e-12);
-        assert!(p.point_b.distance(DVec3::new(0.1 + gap, 0.0, 0.0)) < 1e-12);
+        assert!((p.gap - gap).abs() < EXACT, "{p:?}");
+        assert!(p.point_a.distance(DVec3::new(0.1, 0.0, 0.0)) < EXACT);
+        assert!(p.point_b.distance(DVec3::new(0.1 + gap, 0.0, 0.0)) < EXACT);
     }
 }
 
@@ -947,7 +952,7 @@ fn sliding_and_turning_keeps_the_ids() {
             if let Feature::Vertex(_) = p.id.a {
                 let carried = p1.transform_point(p0.inverse_transform_point(old.point_a));
                 assert!(
-                    carried.distance(p.point_a) < 1e-12,
+                    carried.distance(p.point_a) < EXACT,
                     "case {k}: {carried} vs {p:?}"
                 );
             }
@@ -1026,12 +1031,12 @@ fn arbitrary_normals_never_panic_or_give_nan() {
             continue;
         };
         some += 1;
-        assert!(m.normal.is_finite() && (m.normal.length() - 1.0).abs() < 1e-12);
+        assert!(m.normal.is_finite() && (m.normal.length() - 1.0).abs() < EXACT);
         assert!(!m.points().is_empty() && m.points().len() <= MAX_POINTS);
         let slack = (POINT_MERGE_FRACTION * tol)
             .max(a.tolerance())
             .max(b.tolerance())
-            + 1e-15 * far.max(1.0);
+            + f64::EPSILON * far;
         for p in m.points() {
             assert!(p.point_a.is_finite() && p.point_b.is_finite() && p.gap <= tol);
             let on = |q: &ConvexPolyhedron, pose: &Pose, x: DVec3| {
