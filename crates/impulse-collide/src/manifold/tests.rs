@@ -661,7 +661,9 @@ fn random_hull(r: &mut rand::rngs::Xoshiro256PlusPlus) -> ConvexPolyhedron {
 /// point), its gap is `(point_b − point_a)·n` and at least minus the penetration depth (the
 /// separating-axis test), the deepest gap is the pair's gap along the normal (from all
 /// vertices), the normal is the brute-force closest points' direction (separated) or a
-/// least-overlap axis (overlapping), ids are distinct. Several kinds of contact occur.
+/// least-overlap axis (overlapping), ids name features holding their points and are
+/// distinct, and the manifold does not depend on the warm start. Several kinds of contact
+/// occur.
 #[test]
 fn random_hulls_against_brute_force() {
     let mut r = rng(7);
@@ -704,6 +706,20 @@ fn random_hulls_against_brute_force() {
         let (ca, cb) = (Convex::Polyhedron(a.clone()), Convex::Polyhedron(b.clone()));
         let m = manifold(&ca, &pa, &cb, &pb).unwrap();
         let n = m.normal;
+        // The same manifold whichever features the search starts from (the last closest
+        // features of the pair, or vertex 0): names must not depend on the warm start.
+        let warm = shape::convex_closest(&ca, &pa, &cb, &pb, FeaturePair::default()).features;
+        for start in [warm, FeaturePair::default()] {
+            let again = manifold_along(&ca, &pa, &cb, &pb, n, start, TOL)
+                .unwrap()
+                .unwrap();
+            assert_eq!(again.features, m.features, "case {case}: from {start:?}");
+            assert_eq!(again.points().len(), m.points().len());
+            for (p, q) in again.points().iter().zip(m.points()) {
+                assert_eq!(p.id, q.id, "case {case}: from {start:?}");
+                assert!(p.point_a.distance(q.point_a) < EXACT && (p.gap - q.gap).abs() < EXACT);
+            }
+        }
         let sep = brute::sat_separation(&a, &pa, &b, &pb);
         let world = |p: &ConvexPolyhedron, pose: &Pose| -> Vec<f64> {
             p.vertices()
