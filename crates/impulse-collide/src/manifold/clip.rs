@@ -66,16 +66,20 @@ pub(crate) fn support_feature(
     for &v in &set {
         for &e in poly.vertex_edges(v) {
             let ed = poly.edge(e);
-            for f in [ed.left, ed.right] {
-                let c = poly.face_plane(f).normal.dot(dir);
-                let better = face.is_none_or(|(bc, bf)| c > bc || (c == bc && f < bf));
-                if c >= FACE_MIN_COS && better && poly.face_vertices(f).iter().all(|&w| near(w)) {
-                    face = Some((c, f));
-                }
+            // Each face around v once: the one left of the edge oriented away from v. Each
+            // edge once: from its tail (both ends must be in the set).
+            let f = if ed.tail == v { ed.left } else { ed.right };
+            let c = poly.face_plane(f).normal.dot(dir);
+            let better = face.is_none_or(|(bc, bf)| c > bc || (c == bc && f < bf));
+            if c >= FACE_MIN_COS && better && poly.face_vertices(f).iter().all(|&w| near(w)) {
+                face = Some((c, f));
+            }
+            if ed.tail != v || face.is_some() {
+                continue;
             }
             let low = height(ed.tail).min(height(ed.head));
             let better = edge.is_none_or(|(bl, be)| low > bl || (low == bl && e < be));
-            if better && near(ed.tail) && near(ed.head) {
+            if better && near(ed.head) {
                 edge = Some((low, e));
             }
         }
