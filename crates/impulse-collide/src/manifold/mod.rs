@@ -69,6 +69,7 @@ use crate::shape::{self, Convex, Shape};
 
 mod clip;
 pub mod coherence;
+mod reduce;
 #[cfg(test)]
 mod tests;
 
