@@ -194,11 +194,13 @@ mod tests {
     /// Points on a random ellipse (in convex position), 5–24 of them, with random gaps: the
     /// reduction keeps four, one of them the deepest, and, up to [`EXHAUSTIVE_MAX`] points,
     /// exactly the largest hull of any four holding the deepest (brute force); above it (the
-    /// greedy and exchange pass) at least 0.85 of it (0.894 seen).
+    /// greedy and exchange pass) at least 0.85 of it (0.895 seen) and the largest itself in
+    /// at least 60 % of the cases (73 % seen; the greedy choice alone: 34 %).
     #[test]
     fn reduction_keeps_the_deepest_and_the_area() {
         let mut r = rng(3);
         let mut worst = [f64::INFINITY; 2];
+        let (mut optimal, mut many) = (0, 0);
         for _ in 0..200 {
             let count = r.random_range(5..=24);
             let (ax, ay) = (r.random_range(0.1..1.0), r.random_range(0.1..1.0));
@@ -240,9 +242,14 @@ mod tests {
             let got = convex_area(&kept.iter().map(|p| p.point_a).collect::<Vec<_>>());
             let w = &mut worst[usize::from(count > EXHAUSTIVE_MAX)];
             *w = w.min(got / best);
+            if count > EXHAUSTIVE_MAX {
+                optimal += usize::from(got >= best * (1.0 - ROUNDING));
+                many += 1;
+            }
         }
         assert!(worst[0] >= 1.0 - ROUNDING, "{worst:?}");
         assert!(worst[1] >= 0.85, "{worst:?}");
+        assert!(10 * optimal >= 6 * many, "optimal in {optimal} of {many}");
     }
 
     /// Collinear points (a contact along a line): the deepest and the two ends.
