@@ -11,6 +11,9 @@
 //! - what a distance-zero query cannot say: the penetration depth and contact normal of
 //!   pieces that touch or overlap ([`depth`]), and the near vertices of a face-on contact
 //!   ([`patch`]);
+//! - contact manifolds of touching pieces: up to four points from the closest features (face
+//!   clipping, edge and vertex contacts, smooth pieces), each named by the features that
+//!   produced it, and their matching from one step to the next ([`manifold`]);
 //! - time-of-impact lower bounds: the two routines every motion type supplies (swept box of the
 //!   centre of mass, TOI coefficients; eqs. 2.2–2.5, 2.13–2.15, and for ballistic bodies a
 //!   tighter spin bound from the current ω and ‖ω̇‖ ≤ ‖L‖·ω_max/I_min) for fixed, ballistic,
@@ -31,6 +34,7 @@ pub mod depth;
 pub mod feature;
 pub mod gjk;
 pub mod heap;
+pub mod manifold;
 pub mod motion;
 pub mod patch;
 pub mod point;
