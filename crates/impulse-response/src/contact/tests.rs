@@ -99,7 +99,10 @@ fn resting_box_carries_its_weight_and_stops() {
     // stays in its cone.
     let weight = m * G * H;
     let total: DVec3 = contacts.iter().map(|c| c.frame_impulse_world()).sum();
-    assert!((total - DVec3::new(0.0, 0.0, weight)).length() < 1e-9 * weight, "{total:?}");
+    assert!(
+        (total - DVec3::new(0.0, 0.0, weight)).length() < 1e-9 * weight,
+        "{total:?}"
+    );
     for c in &contacts {
         assert!(c.impulse.z >= 0.0);
         assert!(c.impulse.truncate().length() <= c.friction * c.impulse.z * (1.0 + 1e-12));
@@ -446,7 +449,10 @@ fn warm_start_from_the_solution_takes_one_sweep() {
     assert_eq!(warm.iterations, 1, "{warm:?}");
     // One sweep within the tolerance moves an impulse by at most tolerance/K_nn ≤ tolerance·m.
     for (c, p) in contacts.iter().zip(&solution) {
-        assert!((c.impulse - *p).length() <= 2.0 * tight().tolerance * m, "{c:?} vs {p:?}");
+        assert!(
+            (c.impulse - *p).length() <= 2.0 * tight().tolerance * m,
+            "{c:?} vs {p:?}"
+        );
     }
 }
 
