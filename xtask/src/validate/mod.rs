@@ -468,6 +468,17 @@ mod tests {
     use super::case::{Check, Metric};
     use super::*;
 
+    /// Runs one case as `run_cases` does (on the parallel runner), then judges it.
+    fn run_case(case: &Case, update: bool, dir: &Path, rows: &mut Vec<Row>, tally: &mut Tally) {
+        let (outcome, seconds) = run_parallel(&[case]).pop().expect("one case, one outcome");
+        let judged = Judged {
+            outcome,
+            seconds,
+            update,
+        };
+        judge_case(case, judged, dir, rows, tally);
+    }
+
     fn no_metrics() -> std::result::Result<Vec<Metric>, String> {
         Ok(Vec::new())
     }
