@@ -149,6 +149,52 @@ fn energy_never_grows_and_loops_stay_closed() {
     }
 }
 
+/// The continuous system conserves energy (no damping, no gravity): backward Euler's loss
+/// over a fixed time must be first order in h (halving h halves it) and small. Centrifugal
+/// and Coriolis forces (`∂T/∂θ`, the variation of `M`) are exercised by fast spinning joints.
+#[test]
+fn energy_loss_is_first_order_in_h() {
+    let mut rng = rng(77);
+    for case in 0..3 {
+        let mut m = random_mechanism(&mut rng, 3 + case, 0, 2, 2.0)
+            .build()
+            .unwrap();
+        for j in &mut m.joints {
+            j.damping.iter_mut().for_each(|d| *d = 0.0);
+        }
+        let v: Vec<f64> = (0..m.ndof).map(|_| rng.random_range(-5.0..5.0)).collect();
+        let loss = |h: f64| {
+            let mut s = FullSim::new(&m, h, FullOptions::default()).unwrap();
+            s.theta_dot.clone_from(&v);
+            let e0 = s.energy();
+            let steps = (ENERGY_HORIZON / h).round() as usize;
+            for _ in 0..steps {
+                s.step().unwrap();
+            }
+            (e0 - s.energy()) / e0
+        };
+        let (l1, l2) = (loss(2e-4), loss(1e-4));
+        let ratio = l2 / l1;
+        println!(
+            "tree {case} (ndof {}): energy loss {l1:.3e} at h, {l2:.3e} at h/2",
+            m.ndof
+        );
+        assert!(l1 > 0.0 && l1 <= ENERGY_LOSS_MAX, "loss {l1:e}");
+        assert!(
+            (HALVING_BAND.0..=HALVING_BAND.1).contains(&ratio),
+            "loss ratio {ratio}: not first order"
+        );
+    }
+}
+
+/// Simulated time of [`energy_loss_is_first_order_in_h`] (s).
+const ENERGY_HORIZON: f64 = 0.02;
+/// Backward Euler's relative energy loss over the horizon at h = 2e-4 s (≈ h·Σω²·t, the
+/// joints turning at up to 5 rad/s over stiff springs of 1e-4–1e-2 compliance, ~1e-2).
+const ENERGY_LOSS_MAX: f64 = 0.1;
+/// Ratio of the losses at h/2 and h for a first-order method.
+const HALVING_BAND: (f64, f64) = (0.4, 0.6);
+
 /// A free 2 kg body with a ball-jointed arm and a hinged tip.
 fn floating(gravity: [f64; 3]) -> Mechanism {
     let mut d = MechanismDesc::new("floating");
