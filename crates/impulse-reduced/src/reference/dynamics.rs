@@ -15,19 +15,22 @@
 //!   the external wrenches (springs, dampers and closure forces are internal),
 //! - closure: `r(θ⁺) = 0` at position level (no drift), `μ = hλ` the closure impulses.
 //!
-//! `M(q)` by composite inertias (CRBA), `∂T/∂θ` by central differences of `T` over each joint's
-//! subtree (its error, ~1e-10 relative, only perturbs the trajectory at that level). The
-//! implicit system is solved by Newton. Small systems (≤ [`tol::FULL_EXACT_TANGENT_MAX`]
+//! `M(q)` by composite inertias (CRBA), `∂T/∂θ` from each subtree's momentum and central
+//! differences of the joint's own velocity map (their error, ~1e-10 relative, only perturbs the
+//! trajectory at that level). The implicit system is solved by Newton. Small systems (≤ [`tol::FULL_EXACT_TANGENT_MAX`]
 //! velocities) take the tangent's velocity columns by differences of the residual; larger
 //! ones the tangent `[M + hD + h²K, −Gᵀ; G, 0]` (the Coriolis, load-stiffness and
-//! mass-variation terms it leaves out only slow the convergence; the residual is exact), each solve by LU, or by truncated SVD when loops are
+//! mass-variation terms it leaves out only slow the convergence; the residual is exact), solved
+//! for a fixed-base tree in O(n) by the articulated-body recursion with `hD + h²K` as joint
+//! armature (the articulated inertias symmetrised at every level: a 50-link chain otherwise
+//! amplifies round-off to 15 % of the solution), each solve by LU, or by truncated SVD when loops are
 //! present (redundant closures), with backtracking on the residual. Backward Euler dissipates:
 //! the energy does not grow for any step (tested at h = 1 s).
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 use glam::DVec3;
-use impulse_geom::{Pose, SpatialInertia, Twist, Wrench};
+use impulse_geom::{Mat6, Pose, SpatialInertia, Twist, Wrench};
 
 use crate::desc::BaseDesc;
 use crate::error::Error;
@@ -91,10 +94,15 @@ pub struct FullSim<'m> {
     pub gravity: DVec3,
     /// Settings.
     pub options: FullOptions,
-    /// Links below each link in the tree (itself first, walk order).
-    subtree: Vec<Vec<usize>>,
     free: bool,
 }
+
+/// The implicit step's residual at velocities and closure impulses: residual, kinematics at
+/// the end of the step, closure Jacobian, momentum scale.
+type ResidualFn<'a> = dyn Fn(&[f64], &[f64]) -> (Vec<f64>, Kin, Mat<f64>, f64) + 'a;
+
+/// One joint of the articulated-body recursion: `U = I^A S` (columns), `D⁻¹`, `u = τ − Sᵀp^A`.
+type JointSolve = (Vec<[f64; 6]>, Mat<f64>, Vec<f64>);
 
 /// Kinematic state of every link: poses, joint columns (child frame), body twists.
 struct Kin {
@@ -102,6 +110,17 @@ struct Kin {
     /// Per joint, its motion columns in the child's frame (tree joints only).
     cols: Vec<Vec<Twist>>,
     twists: Vec<Twist>,
+}
+
+/// Body twist of joint `j`'s child at joint coordinates `th` and rates `rates`, its parent
+/// moving with `phi_p`: `ᶜAd_p φ_p + J_j θ̇_j`.
+fn child_twist(j: &crate::mechanism::Joint, th: &[f64], phi_p: &Twist, rates: &[f64]) -> Twist {
+    let rel = j.in_parent * joint_motion(j, th) * j.in_child.inverse();
+    let mut t = rel.inverse_transform_twist(phi_p);
+    for (s, d) in joint_jacobian(j, th).iter().zip(rates) {
+        t += j.in_child.transform_twist(s) * *d;
+    }
+    t
 }
 
 impl<'m> FullSim<'m> {
@@ -113,28 +132,6 @@ impl<'m> FullSim<'m> {
         if !(h.is_finite() && h > 0.0) {
             return Err(Error::Argument(format!("time step {h} is not positive")));
         }
-        let mut subtree = vec![Vec::new(); m.links.len()];
-        for &l in m.order.iter().rev() {
-            let mut below = vec![l];
-            for &j in &m.joints_out[l] {
-                let c = m.joints[j].child;
-                if m.tree_joint[c] == Some(j) {
-                    below.extend(subtree[c].iter().copied());
-                }
-            }
-            subtree[l] = below;
-        }
-        // Walk order inside each subtree (a child's list is already in walk order).
-        let rank: Vec<usize> = {
-            let mut r = vec![0; m.links.len()];
-            for (i, &l) in m.order.iter().enumerate() {
-                r[l] = i;
-            }
-            r
-        };
-        for s in &mut subtree {
-            s.sort_by_key(|&l| rank[l]);
-        }
         Ok(FullSim {
             m,
             h,
@@ -144,7 +141,6 @@ impl<'m> FullSim<'m> {
             loads: Vec::new(),
             gravity: m.gravity,
             options,
-            subtree,
             free: m.base_kind == BaseDesc::Free,
         })
     }
@@ -195,48 +191,53 @@ impl<'m> FullSim<'m> {
         k
     }
 
-    /// `∂T/∂θ` at fixed velocities, by central differences over each tree joint's subtree.
-    fn kinetic_gradient(&self, q: &Configuration, td: &[f64], k: &Kin) -> Vec<f64> {
-        let mut g = vec![0.0; self.m.ndof];
-        let mut work = Kin {
-            poses: k.poses.clone(),
-            cols: k.cols.clone(),
-            twists: k.twists.clone(),
-        };
-        let mut qp = q.clone();
-        for (ji, j) in self.m.joints.iter().enumerate() {
-            if self.m.tree_joint[j.child] != Some(ji) {
+    /// `∂T/∂θ` at fixed velocities. Moving coordinate i of tree joint j moves the subtree of
+    /// its child c rigidly: every body twist there is `ᶜAd φ_c` plus terms that do not depend
+    /// on θ_i, so `∂T/∂θ_i = h_cᵀ ∂φ_c/∂θ_i` with `h_c` the subtree's momentum in c's frame.
+    /// `∂φ_c/∂θ_i` by central differences of the joint's own velocity map (O(1) per coordinate,
+    /// O(n) in all).
+    fn kinetic_gradient(&self, q: &Configuration, td: &[f64], k: &Kin, h: &[Wrench]) -> Vec<f64> {
+        let m = self.m;
+        let mut g = vec![0.0; m.ndof];
+        for (ji, j) in m.joints.iter().enumerate() {
+            if m.tree_joint[j.child] != Some(ji) {
                 continue; // a loop joint moves no link
             }
-            let below = &self.subtree[j.child];
+            let range = j.offset..j.offset + j.dof();
+            let mut th = q.theta[range.clone()].to_vec();
+            let rates = &td[range];
+            let phi_p = k.twists[j.parent];
             for c in 0..j.dof() {
-                let i = j.offset + c;
-                let step = self.options.fd_step * (1.0 + q.theta[i].abs());
-                let mut t = [0.0; 2];
-                for (side, sign) in [1.0, -1.0].into_iter().enumerate() {
-                    qp.theta[i] = q.theta[i] + sign * step;
-                    for &l in below {
-                        self.descend(&mut work, &qp, td, l);
-                    }
-                    t[side] = below
-                        .iter()
-                        .map(|&l| self.m.links[l].inertia.kinetic_energy(&work.twists[l]))
-                        .sum();
-                }
-                qp.theta[i] = q.theta[i];
-                g[i] = (t[0] - t[1]) / (2.0 * step);
-            }
-            for &l in below {
-                work.poses[l] = k.poses[l];
-                work.twists[l] = k.twists[l];
-            }
-            for &l in below {
-                if let Some(jj) = self.m.tree_joint[l] {
-                    work.cols[jj].clone_from(&k.cols[jj]);
-                }
+                let x = th[c];
+                let step = self.options.fd_step * (1.0 + x.abs());
+                th[c] = x + step;
+                let plus = child_twist(j, &th, &phi_p, rates);
+                th[c] = x - step;
+                let minus = child_twist(j, &th, &phi_p, rates);
+                th[c] = x;
+                g[j.offset + c] = h[j.child].power(&((plus - minus) * (0.5 / step)));
             }
         }
         g
+    }
+
+    /// Momentum of every link's subtree (the link and all below it in the tree), its frame.
+    fn subtree_momenta(&self, k: &Kin) -> Vec<Wrench> {
+        let m = self.m;
+        let mut h: Vec<Wrench> = m
+            .links
+            .iter()
+            .zip(&k.twists)
+            .map(|(l, t)| l.inertia.mul_twist(t))
+            .collect();
+        for &l in m.order.iter().rev() {
+            if let Some(ji) = m.tree_joint[l] {
+                let p = m.joints[ji].parent;
+                let moved = (k.poses[p].inverse() * k.poses[l]).transform_wrench(&h[l]);
+                h[p] += moved;
+            }
+        }
+        h
     }
 
     /// Composite inertias (link frames) of every subtree.
@@ -369,16 +370,21 @@ impl<'m> FullSim<'m> {
         q
     }
 
-    /// Generalized momentum `M v`, with the base rows as the world momentum when free.
-    fn momentum(&self, mq: &Mat<f64>, v: &[f64], base: &Pose) -> Vec<f64> {
-        let n = v.len();
-        let mut p: Vec<f64> = (0..n)
-            .map(|r| (0..n).map(|c| mq[(r, c)] * v[c]).sum())
-            .collect();
+    /// Generalized momentum `∂T/∂v = M v` (each joint column against its subtree's momentum),
+    /// with the base rows as the structure's world momentum when free.
+    fn momentum(&self, k: &Kin, h: &[Wrench]) -> Vec<f64> {
+        let mut p = vec![0.0; self.nv()];
+        for (ji, j) in self.m.joints.iter().enumerate() {
+            if self.m.tree_joint[j.child] == Some(ji) {
+                for (c, s) in k.cols[ji].iter().enumerate() {
+                    p[j.offset + c] = h[j.child].power(s);
+                }
+            }
+        }
         if self.free {
             let b = self.base_index();
-            let pb = Wrench::from_array(core::array::from_fn(|r| p[b + r]));
-            p[b..b + 6].copy_from_slice(&base.transform_wrench(&pb).to_array());
+            let world = k.poses[self.m.base].transform_wrench(&h[self.m.base]);
+            p[b..b + 6].copy_from_slice(&world.to_array());
         }
         p
     }
@@ -448,7 +454,7 @@ impl<'m> FullSim<'m> {
         let (n, nv) = (m.ndof, self.nv());
         let nl = m.loop_joints.len();
         let k0 = self.kinematics(&self.config, &self.theta_dot, &self.base_twist);
-        let p0 = self.momentum(&self.mass_matrix(&k0), &v0, &self.config.base);
+        let p0 = self.momentum(&k0, &self.subtree_momenta(&k0));
         let stiff: Vec<f64> = m
             .joints
             .iter()
@@ -462,7 +468,7 @@ impl<'m> FullSim<'m> {
         let length = 1.0 + m.bounding_radius();
 
         // Residual of the implicit step at velocities v and closure impulses mu.
-        let residual = |v: &[f64], mu: &[f64]| -> (Vec<f64>, Mat<f64>, Mat<f64>, f64) {
+        let residual = |v: &[f64], mu: &[f64]| -> (Vec<f64>, Kin, Mat<f64>, f64) {
             let q = self.advance(v);
             let base_twist = if self.free {
                 Twist::from_array(core::array::from_fn(|r| v[n + r]))
@@ -470,9 +476,9 @@ impl<'m> FullSim<'m> {
                 Twist::ZERO
             };
             let k = self.kinematics(&q, &v[..n], &base_twist);
-            let mq = self.mass_matrix(&k);
-            let p = self.momentum(&mq, v, &q.base);
-            let dt = self.kinetic_gradient(&q, &v[..n], &k);
+            let hm = self.subtree_momenta(&k);
+            let p = self.momentum(&k, &hm);
+            let dt = self.kinetic_gradient(&q, &v[..n], &k, &hm);
             let f = self.generalized_force(&k);
             let mut r = vec![0.0; nv + 6 * nl];
             let mut scale = p0.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
@@ -512,9 +518,12 @@ impl<'m> FullSim<'m> {
                 let t: f64 = (0..6 * nl).map(|row| g[(row, c)] * mu[row]).sum();
                 r[c] -= t;
             }
-            (r, mq, g, scale)
+            (r, k, g, scale)
         };
         let size = |r: &[f64], scale: f64| -> f64 {
+            if !r.iter().all(|x| x.is_finite()) {
+                return f64::INFINITY;
+            }
             let mom = r[..nv].iter().fold(0.0_f64, |a, x| a.max(x.abs())) / scale;
             let clo = r[nv..].iter().fold(0.0_f64, |a, x| a.max(x.abs())) * h / length;
             mom.max(clo)
@@ -522,7 +531,7 @@ impl<'m> FullSim<'m> {
 
         let mut v = v0.clone();
         let mut mu = vec![0.0; 6 * nl];
-        let (mut r, mut mq, mut g, mut scale) = residual(&v, &mu);
+        let (mut r, mut kin, mut g, mut scale) = residual(&v, &mu);
         let mut err = size(&r, scale);
         let mut it = 0;
         while err > self.options.tolerance {
@@ -533,61 +542,32 @@ impl<'m> FullSim<'m> {
                 });
             }
             it += 1;
-            // Tangent [M + hD + h²K, −Gᵀ; G, 0].
-            let dim = nv + 6 * nl;
-            let mut a = Mat::<f64>::zeros(dim, dim);
-            for i in 0..nv {
-                for c in 0..nv {
-                    a[(i, c)] = mq[(i, c)];
-                }
-            }
-            for i in 0..n {
-                a[(i, i)] += h * damp[i] + h * h * stiff[i];
-            }
-            for row in 0..6 * nl {
-                for c in 0..n {
-                    a[(nv + row, c)] = g[(row, c)];
-                    a[(c, nv + row)] = -g[(row, c)];
-                }
-            }
-            if nv <= tol::FULL_EXACT_TANGENT_MAX {
-                // Small systems: the velocity columns by forward differences of the residual
-                // (Newton then converges quadratically, whatever h and the speeds).
-                for c in 0..nv {
-                    let step = tol::FULL_TANGENT_STEP * (1.0 + v[c].abs());
-                    let mut vp = v.clone();
-                    vp[c] += step;
-                    let (rp, ..) = residual(&vp, &mu);
-                    for (i, (x, y)) in rp.iter().zip(&r).enumerate() {
-                        a[(i, c)] = (x - y) / step;
-                    }
-                }
-            }
-            let rhs = Mat::from_fn(dim, 1, |i, _| -r[i]);
-            let delta = if nl == 0 {
-                a.partial_piv_lu().solve(&rhs)
+            let arm: Vec<f64> = (0..n).map(|i| h * damp[i] + h * h * stiff[i]).collect();
+            let delta: Vec<f64> = if nl == 0 && !self.free && nv > tol::FULL_EXACT_TANGENT_MAX {
+                // Tangent M + hD + h²K of a fixed-base tree: the articulated-body recursion
+                // solves it in O(n) without forming M.
+                let rhs: Vec<f64> = r.iter().map(|x| -x).collect();
+                self.articulated_solve(&kin, &arm, &rhs)?
             } else {
-                pinv(a.as_ref(), self.options.tsvd)?.inverse * rhs
+                self.dense_step(&kin, &arm, &g, &r, &v, &mu, &residual)?
             };
-            if !(0..dim).all(|i| delta[(i, 0)].is_finite()) {
+            if !delta.iter().all(|x| x.is_finite()) {
                 return Err(Error::LinearAlgebra("Newton step of the full model".into()));
             }
             let mut alpha = 1.0;
             loop {
-                let vn: Vec<f64> = (0..nv).map(|i| v[i] + alpha * delta[(i, 0)]).collect();
-                let mn: Vec<f64> = (0..6 * nl)
-                    .map(|i| mu[i] + alpha * delta[(nv + i, 0)])
-                    .collect();
-                let (rn, mqn, gn, sn) = residual(&vn, &mn);
+                let vn: Vec<f64> = (0..nv).map(|i| v[i] + alpha * delta[i]).collect();
+                let mn: Vec<f64> = (0..6 * nl).map(|i| mu[i] + alpha * delta[nv + i]).collect();
+                let (rn, kn, gn, sn) = residual(&vn, &mn);
                 let en = size(&rn, sn);
                 if en < err || alpha < tol::STATIC_MIN_STEP {
-                    (v, mu, r, mq, g, scale, err) = (vn, mn, rn, mqn, gn, sn, en);
+                    (v, mu, r, kin, g, scale, err) = (vn, mn, rn, kn, gn, sn, en);
                     break;
                 }
                 alpha *= 0.5;
             }
         }
-        let _ = (&r, scale);
+        let _ = (&r, &kin, &g, scale);
         self.config = self.advance(&v);
         self.theta_dot.copy_from_slice(&v[..n]);
         if self.free {
@@ -597,6 +577,134 @@ impl<'m> FullSim<'m> {
             iterations: it,
             residual: err,
         })
+    }
+
+    /// One Newton step by a dense solve of `[M + A, −Gᵀ; G, 0] δ = −r` (`A` the diagonal
+    /// `hD + h²K`); for small systems the velocity columns are differences of the residual.
+    #[allow(clippy::too_many_arguments)]
+    fn dense_step(
+        &self,
+        k: &Kin,
+        arm: &[f64],
+        g: &Mat<f64>,
+        r: &[f64],
+        v: &[f64],
+        mu: &[f64],
+        residual: &ResidualFn<'_>,
+    ) -> Result<Vec<f64>, Error> {
+        let (n, nv) = (self.m.ndof, self.nv());
+        let nl = g.nrows() / 6;
+        let dim = nv + 6 * nl;
+        let mq = self.mass_matrix(k);
+        let mut a = Mat::<f64>::zeros(dim, dim);
+        for i in 0..nv {
+            for c in 0..nv {
+                a[(i, c)] = mq[(i, c)];
+            }
+        }
+        for (i, x) in arm.iter().enumerate() {
+            a[(i, i)] += x;
+        }
+        for row in 0..6 * nl {
+            for c in 0..n {
+                a[(nv + row, c)] = g[(row, c)];
+                a[(c, nv + row)] = -g[(row, c)];
+            }
+        }
+        if nv <= tol::FULL_EXACT_TANGENT_MAX {
+            // Small systems: the velocity columns by forward differences of the residual
+            // (Newton then converges quadratically, whatever h and the speeds).
+            for c in 0..nv {
+                let step = tol::FULL_TANGENT_STEP * (1.0 + v[c].abs());
+                let mut vp = v.to_vec();
+                vp[c] += step;
+                let (rp, ..) = residual(&vp, mu);
+                for (i, (x, y)) in rp.iter().zip(r).enumerate() {
+                    a[(i, c)] = (x - y) / step;
+                }
+            }
+        }
+        let rhs = Mat::from_fn(dim, 1, |i, _| -r[i]);
+        let delta = if nl == 0 {
+            a.partial_piv_lu().solve(&rhs)
+        } else {
+            pinv(a.as_ref(), self.options.tsvd)?.inverse * rhs
+        };
+        Ok((0..dim).map(|i| delta[(i, 0)]).collect())
+    }
+
+    /// Solves `(M + diag(arm)) x = tau` for a fixed-base tree by the articulated-body
+    /// recursion (Featherstone's ABA at zero velocity, the diagonal as joint armature): O(n).
+    fn articulated_solve(&self, k: &Kin, arm: &[f64], tau: &[f64]) -> Result<Vec<f64>, Error> {
+        let m = self.m;
+        let dot = |a: &[f64; 6], b: &[f64; 6]| -> f64 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
+        let mut ia: Vec<Mat6> = m.links.iter().map(|l| l.inertia.to_mat6()).collect();
+        let mut pa = vec![[0.0; 6]; m.links.len()];
+        // Per tree joint: U = I^A S, D⁻¹, u = τ − Sᵀp^A.
+        let mut saved: Vec<JointSolve> =
+            vec![(Vec::new(), Mat::zeros(0, 0), Vec::new()); m.joints.len()];
+        for &l in m.order.iter().rev() {
+            let Some(ji) = m.tree_joint[l] else { continue };
+            let j = &m.joints[ji];
+            let d = j.dof();
+            let s: Vec<[f64; 6]> = k.cols[ji].iter().map(Twist::to_array).collect();
+            let u_cols: Vec<[f64; 6]> = s.iter().map(|c| ia[l].mul_array(c)).collect();
+            let dm = Mat::from_fn(d, d, |a, b| {
+                dot(&s[a], &u_cols[b]) + if a == b { arm[j.offset + a] } else { 0.0 }
+            });
+            let d_inv = dm.partial_piv_lu().solve(Mat::<f64>::identity(d, d));
+            if !(0..d).all(|a| (0..d).all(|b| d_inv[(a, b)].is_finite())) {
+                return Err(Error::LinearAlgebra(format!(
+                    "articulated inertia of joint `{}`",
+                    j.name
+                )));
+            }
+            let u: Vec<f64> = (0..d)
+                .map(|a| tau[j.offset + a] - dot(&s[a], &pa[l]))
+                .collect();
+            let mut i_a = ia[l];
+            let mut p_a = pa[l];
+            for a in 0..d {
+                let du: f64 = (0..d).map(|b| d_inv[(a, b)] * u[b]).sum();
+                for (x, y) in p_a.iter_mut().zip(&u_cols[a]) {
+                    *x += y * du;
+                }
+                for b in 0..d {
+                    i_a = i_a - Mat6::outer(&u_cols[a], &u_cols[b]) * d_inv[(a, b)];
+                }
+            }
+            // To the parent: I_p += Xᵀ I X, p_p += Xᵀ p, X = ˡAd_p.
+            let x = (k.poses[l].inverse() * k.poses[j.parent]).adjoint();
+            let xt = x.transpose();
+            // Symmetric against round-off (a chain of hundreds of links amplifies it).
+            let i_a = (i_a + i_a.transpose()) * 0.5;
+            ia[j.parent] = ia[j.parent] + xt * i_a * x;
+            let moved = xt.mul_array(&p_a);
+            for (y, z) in pa[j.parent].iter_mut().zip(moved) {
+                *y += z;
+            }
+            saved[ji] = (u_cols, d_inv, u);
+        }
+        let mut acc = vec![[0.0; 6]; m.links.len()];
+        let mut out = vec![0.0; m.ndof];
+        for &l in &m.order[1..] {
+            let Some(ji) = m.tree_joint[l] else { continue };
+            let j = &m.joints[ji];
+            let (u_cols, d_inv, u) = &saved[ji];
+            let x = (k.poses[l].inverse() * k.poses[j.parent]).adjoint();
+            let mut a_l = x.mul_array(&acc[j.parent]);
+            let r: Vec<f64> = (0..j.dof()).map(|a| u[a] - dot(&u_cols[a], &a_l)).collect();
+            for a in 0..j.dof() {
+                let qdd: f64 = (0..j.dof()).map(|b| d_inv[(a, b)] * r[b]).sum();
+                out[j.offset + a] = qdd;
+                let s = k.cols[ji][a].to_array();
+                for (y, z) in a_l.iter_mut().zip(s) {
+                    *y += z * qdd;
+                }
+            }
+            acc[l] = a_l;
+        }
+        Ok(out)
     }
 
     /// The structure's linear and angular momentum in world axes (angular about the world
