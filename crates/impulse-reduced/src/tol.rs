@@ -97,3 +97,7 @@ pub const FULL_EXACT_TANGENT_MAX: usize = 48;
 /// full-dynamics systems: the residual carries ~1e-12 of noise from the differences of
 /// `∂T/∂θ`, so 1e-7 keeps the tangent accurate to ~1e-5, ample for Newton.
 pub const FULL_TANGENT_STEP: f64 = 1e-7;
+
+/// Times a step of the full dynamics reference may be halved when Newton stalls (so at most
+/// 2⁴ = 16 sub-steps); beyond that [`crate::Error::NoConvergence`] is reported.
+pub const FULL_MAX_HALVINGS: usize = 4;

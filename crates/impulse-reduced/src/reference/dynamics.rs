@@ -72,8 +72,10 @@ impl Default for FullOptions {
 pub struct FullStepReport {
     /// Newton iterations.
     pub iterations: usize,
-    /// Final relative residual.
+    /// Final relative residual (the largest over sub-steps).
     pub residual: f64,
+    /// Backward Euler steps taken: 1, or more when Newton stalled and the step was halved.
+    pub substeps: usize,
 }
 
 /// A running simulation of the full model.
@@ -430,13 +432,41 @@ impl<'m> FullSim<'m> {
             .twists
     }
 
-    /// Advances one step of length `h`.
+    /// Advances one step of length `h`. When Newton stalls (its tangent leaves out terms of
+    /// order `h·|v|`, which a whipping chain makes large), the step is retried as two backward
+    /// Euler steps of `h/2`, at most [`tol::FULL_MAX_HALVINGS`] times over; the report counts
+    /// the sub-steps taken.
     ///
     /// # Errors
-    /// [`Error::NoConvergence`] when Newton does not reach the tolerance;
-    /// [`Error::Argument`] for a load on an unknown link or a non-finite state;
+    /// [`Error::NoConvergence`] when Newton does not reach the tolerance even at the smallest
+    /// sub-step; [`Error::Argument`] for a load on an unknown link or a non-finite state;
     /// [`Error::LinearAlgebra`] if a solve fails.
     pub fn step(&mut self) -> Result<FullStepReport, Error> {
+        let h = self.h;
+        let out = self.substep(h, 0);
+        self.h = h;
+        out
+    }
+
+    fn substep(&mut self, h: f64, depth: usize) -> Result<FullStepReport, Error> {
+        let saved = (self.config.clone(), self.theta_dot.clone(), self.base_twist);
+        self.h = h;
+        match self.newton_step() {
+            Err(Error::NoConvergence { .. }) if depth < tol::FULL_MAX_HALVINGS => {
+                (self.config, self.theta_dot, self.base_twist) = saved;
+                let a = self.substep(0.5 * h, depth + 1)?;
+                let b = self.substep(0.5 * h, depth + 1)?;
+                Ok(FullStepReport {
+                    iterations: a.iterations + b.iterations,
+                    residual: a.residual.max(b.residual),
+                    substeps: a.substeps + b.substeps,
+                })
+            }
+            other => other,
+        }
+    }
+
+    fn newton_step(&mut self) -> Result<FullStepReport, Error> {
         for l in &self.loads {
             if l.link >= self.m.links.len() || !l.force.is_finite() || !l.torque.is_finite() {
                 return Err(Error::Argument(format!(
@@ -576,6 +606,7 @@ impl<'m> FullSim<'m> {
         Ok(FullStepReport {
             iterations: it,
             residual: err,
+            substeps: 1,
         })
     }
 
