@@ -2,7 +2,9 @@
 //!
 //! - **Table 1**: µs per step (end-effector step and every internal link's pose) of the bundled
 //!   helix, ladder and robot arm on 1 and 2 threads, next to the paper's Vortex and FORK⁻¹S
-//!   figures (Intel i7 2.8 GHz, 4 cores, 2014–16).
+//!   figures (Intel i7 2.8 GHz, 4 cores, 2014–16); our full nonlinear reference
+//!   ([`FullSim`]) at the same step, the ratio, and the reduced model's end-effector pose
+//!   error against the full model under the same held force (dynamic, from rest).
 //! - **Table 2**: µs per blended step (Algorithm 5: weights, Algorithm 3 on three matrices,
 //!   eq. 28, the step, Algorithm 4) with 1, 2 and 4 models, next to the paper's.
 //! - **Fig. 7**: relative constraint error against relative end-effector displacement, single
@@ -19,9 +21,11 @@ use std::time::Instant;
 use glam::DVec3;
 use impulse_geom::Pose;
 use impulse_reduced::blend::BlendedModel;
-use impulse_reduced::reference::{Configuration, Load, StaticOptions, solve_statics};
+use impulse_reduced::reference::{
+    Configuration, FullOptions, FullSim, Load, StaticOptions, solve_statics,
+};
 use impulse_reduced::study::{Fig7Row, fig7};
-use impulse_reduced::{ConstructOptions, Mechanism, ReducedModel, ReducedSim, scenes};
+use impulse_reduced::{ConstructOptions, MassModel, Mechanism, ReducedModel, ReducedSim, scenes};
 
 use crate::Result;
 
@@ -39,6 +43,22 @@ const LADDER_STATIC_TOLERANCE: f64 = 1e-7;
 
 /// Steps timed per measurement (after as many warm-up steps).
 const STEPS: usize = 2000;
+
+/// Wall time the full reference is timed for, per mechanism (s): its steps cost milliseconds
+/// to a second, so it runs until this budget is spent (at least [`FULL_MIN_STEPS`] steps).
+const FULL_BUDGET_S: f64 = 2.0;
+
+/// Fewest full-reference steps timed (after one warm-up step).
+const FULL_MIN_STEPS: usize = 3;
+
+/// Steps of the reduced-vs-full trajectory comparison at h = 1 ms (0.1 s simulated: several
+/// periods of the end effector's lowest modes in the bundled mechanisms).
+const ERROR_STEPS: usize = 100;
+
+/// World force on the first end effector in the reduced-vs-full comparison (N), the load of
+/// the timing runs. Under 10 N the helix-400's tip whips after ~0.1 s and the full reference's
+/// Newton stalls even at h/16 (its tangent leaves out terms of order h·|v|).
+const ERROR_FORCE: f64 = 1.0;
 
 /// Paper Table 1: (example, links, Vortex µs, N=1, N=4, N=8).
 const TABLE1: [(&str, usize, f64, f64, f64, f64); 5] = [
@@ -91,6 +111,66 @@ fn time_single(m: &Mechanism, model: &ReducedModel, threads: usize) -> Result<f6
         }
         t.elapsed().as_secs_f64() * 1e6 / STEPS as f64
     }))
+}
+
+/// µs per step of the full reference at step `h`, with the bench's 1 N load on the first end
+/// effector; and the number of steps timed.
+fn time_full(m: &Mechanism, h: f64) -> Result<(f64, usize)> {
+    let mut s = FullSim::new(m, h, FullOptions::default()).map_err(err("full"))?;
+    s.loads = vec![Load {
+        link: m.end_effectors[0],
+        force: DVec3::X,
+        torque: DVec3::ZERO,
+    }];
+    s.step().map_err(err("full step"))?;
+    let t = Instant::now();
+    let mut steps = 0;
+    while steps < FULL_MIN_STEPS || t.elapsed().as_secs_f64() < FULL_BUDGET_S {
+        s.step().map_err(err("full step"))?;
+        steps += 1;
+    }
+    Ok((t.elapsed().as_secs_f64() * 1e6 / steps as f64, steps))
+}
+
+/// End-effector pose errors of reduced models against the full reference under the same held
+/// world force (along (1, 1, 1): in the ladder's plane a force meets locked rungs), all from
+/// rest at step `h`: per model the largest `‖(v/r, ω/π)‖` of `log(H_full⁻¹ H_reduced)` over
+/// [`ERROR_STEPS`] steps (§8.2's scaling), and the largest displacement of the full model's
+/// end effector on the same scale.
+fn pose_errors(m: &Mechanism, models: &[ReducedModel], h: f64) -> Result<(Vec<f64>, f64)> {
+    let e = m.end_effectors[0];
+    let force = DVec3::ONE.normalize() * ERROR_FORCE;
+    let mut reduced = Vec::new();
+    for model in models {
+        let mut red = ReducedSim::new(m, model.clone(), h).map_err(err("sim"))?;
+        let body = model.reference[0].inverse_transform_vector(force);
+        red.external[..3].copy_from_slice(&body.to_array());
+        reduced.push(red);
+    }
+    let mut full = FullSim::new(m, h, FullOptions::default()).map_err(err("full"))?;
+    full.loads = vec![Load {
+        link: e,
+        force,
+        torque: DVec3::ZERO,
+    }];
+    let rest = m.links[e].rest;
+    let r = m.bounding_radius();
+    let norm = |p: &Pose| {
+        let x = p.log();
+        ((x.v / r).length_squared() + (x.w / std::f64::consts::PI).length_squared()).sqrt()
+    };
+    let mut worst = vec![0.0_f64; models.len()];
+    let mut disp = 0.0_f64;
+    for _ in 0..ERROR_STEPS {
+        full.step().map_err(err("full step"))?;
+        let pf = full.poses()[e];
+        for (red, w) in reduced.iter_mut().zip(&mut worst) {
+            red.step();
+            *w = w.max(norm(&(pf.inverse() * red.end_effector_pose(0))));
+        }
+        disp = disp.max(norm(&(rest.inverse() * pf)));
+    }
+    Ok((worst, disp))
 }
 
 /// Models at the rest pose and at static equilibria under a sideways force on the first end
@@ -148,11 +228,28 @@ fn time_blended(m: &Mechanism, set: &BlendedModel) -> Result<f64> {
 pub fn run(out: &Path) -> Result<()> {
     println!("FORK⁻¹S Table 1: µs per step (end effectors + every internal link), h = 1 ms");
     println!(
-        "{:<14} {:>5} {:>9} {:>9} | paper: {:>7} {:>6} {:>6} {:>6}",
-        "example", "links", "ours N=1", "ours N=2", "Vortex", "N=1", "N=4", "N=8"
+        "(full: our nonlinear reference, backward Euler + Newton, same h; error: reduced vs full \
+         end-effector pose under {ERROR_FORCE} N over {ERROR_STEPS} steps, ‖(v/r, ω/π)‖, with the \
+         exact J M⁻¹ Jᵀ mass and with the paper's eq. 7 projection)"
+    );
+    println!(
+        "{:<14} {:>5} {:>9} {:>9} {:>10} {:>8} {:>9} {:>9} {:>9} | paper: {:>7} {:>6} {:>6} {:>6}",
+        "example",
+        "links",
+        "ours N=1",
+        "ours N=2",
+        "full",
+        "full/N=1",
+        "EE error",
+        "(eq. 7)",
+        "EE disp",
+        "Vortex",
+        "N=1",
+        "N=4",
+        "N=8"
     );
     let mut csv = String::from(
-        "example,links,ours_n1_us,ours_n2_us,paper_vortex_us,paper_n1_us,paper_n4_us,paper_n8_us\n",
+        "example,links,ours_n1_us,ours_n2_us,full_us,full_steps_timed,full_over_n1,ee_pose_error,ee_pose_error_paper_mass,ee_displacement,paper_vortex_us,paper_n1_us,paper_n4_us,paper_n8_us\n",
     );
     for (name, links, vortex, p1, p4, p8) in TABLE1 {
         let m = mechanism(name)?;
@@ -165,12 +262,26 @@ pub fn run(out: &Path) -> Result<()> {
         .map_err(err(name))?;
         let t1 = time_single(&m, &model, 1)?;
         let t2 = time_single(&m, &model, 2)?;
+        let (tf, steps) = time_full(&m, 1e-3)?;
+        let paper = ReducedModel::build(
+            &m,
+            &Configuration::rest(&m),
+            &[],
+            &ConstructOptions {
+                mass: MassModel::Paper,
+                ..ConstructOptions::default()
+            },
+        )
+        .map_err(err(name))?;
+        let (errors, disp) = pose_errors(&m, &[model.clone(), paper], 1e-3)?;
+        let (error, error_paper) = (errors[0], errors[1]);
+        let ratio = tf / t1;
         println!(
-            "{name:<14} {links:>5} {t1:>9.1} {t2:>9.1} | paper: {vortex:>7.0} {p1:>6.0} {p4:>6.0} {p8:>6.0}"
+            "{name:<14} {links:>5} {t1:>9.1} {t2:>9.1} {tf:>10.0} {ratio:>7.0}× {error:>9.2e} {error_paper:>9.2e} {disp:>9.2e} | paper: {vortex:>7.0} {p1:>6.0} {p4:>6.0} {p8:>6.0}"
         );
         let _ = writeln!(
             csv,
-            "{name},{links},{t1:.2},{t2:.2},{vortex},{p1},{p4},{p8}"
+            "{name},{links},{t1:.2},{t2:.2},{tf:.1},{steps},{ratio:.1},{error:.4e},{error_paper:.4e},{disp:.4e},{vortex},{p1},{p4},{p8}"
         );
     }
     write(out, "table1.csv", &csv)?;

@@ -3,7 +3,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use impulse_geom::{Pose, Twist};
-use impulse_reduced::internal::{equivalent_wrenches, link_twist};
+use impulse_reduced::internal::{equivalent_wrenches, link_twist, place};
 use impulse_reduced::reference::Configuration;
 use impulse_reduced::{ConstructOptions, ReducedModel, ReducedSim, scenes};
 
@@ -37,6 +37,28 @@ fn parts(c: &mut Criterion) {
                 .zip(&model.internal_reference)
                 .map(|(t, h)| *h * Pose::exp(t))
                 .fold(0.0, |a, p| a + p.translation.x)
+        })
+    });
+    c.bench_function("helix-400 parts/fast_exp and place", |b| {
+        b.iter(|| {
+            twists
+                .iter()
+                .zip(&model.internal_reference)
+                .map(|(t, h)| place(h, t))
+                .fold(0.0, |a, p| a + p.translation.x)
+        })
+    });
+    let mut out = vec![Pose::IDENTITY; model.internal.len()];
+    c.bench_function("helix-400 parts/whole step, 1 thread", |b| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            b.iter(|| {
+                s.step();
+                s.internal_poses(&mut out);
+            })
         })
     });
 }

@@ -104,6 +104,29 @@ fn columns(m: &Mechanism, q: &Configuration, ji: usize) -> Mat<f64> {
     })
 }
 
+/// Every joint's motion columns in its child's frame at `q` (see [`columns`]).
+pub(crate) fn all_columns(m: &Mechanism, q: &Configuration) -> Vec<Mat<f64>> {
+    (0..m.joints.len()).map(|ji| columns(m, q, ji)).collect()
+}
+
+/// The walk's input for the compliance: each joint's columns and `C_θ = diag(c)`.
+pub(crate) fn compliance_inputs(m: &Mechanism, cols: &[Mat<f64>]) -> Vec<JointInput> {
+    m.joints
+        .iter()
+        .zip(cols)
+        .map(|(j, c)| JointInput {
+            columns: c.clone(),
+            matrix: Mat::from_fn(
+                j.dof(),
+                j.dof(),
+                |a, b| {
+                    if a == b { j.compliance[a] } else { 0.0 }
+                },
+            ),
+        })
+        .collect()
+}
+
 /// Rank of `J_E Z`: the end effectors' degrees of freedom counted from the joints.
 fn expected_rank(
     m: &Mechanism,
@@ -154,21 +177,10 @@ impl ReducedModel {
         let poses = link_poses(m, q);
         let ee = &m.end_effectors;
         let ne = ee.len();
-        let cols: Vec<Mat<f64>> = (0..m.joints.len()).map(|ji| columns(m, q, ji)).collect();
+        let cols = all_columns(m, q);
 
         // Compliance (eqs. 10–14).
-        let inputs: Vec<JointInput> =
-            m.joints
-                .iter()
-                .zip(&cols)
-                .map(|(j, c)| JointInput {
-                    columns: c.clone(),
-                    matrix: Mat::from_fn(j.dof(), j.dof(), |a, b| {
-                        if a == b { j.compliance[a] } else { 0.0 }
-                    }),
-                })
-                .collect();
-        let cw = walk(m, &poses, &inputs, tsvd)?;
+        let cw = walk(m, &poses, &compliance_inputs(m, &cols), tsvd)?;
         let compliance = symmetrise(&stack(&cw.to_end_effectors, ee));
         // Rank check: truncate C at the rank of J_E Z (the joints' count), and only if C's
         // spectrum has a clear gap there (eq. 9 threshold below, tol::RANK_GAP above).

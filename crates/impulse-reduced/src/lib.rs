@@ -11,7 +11,8 @@
 //! - the construction of the reduced model (§4–5): the chain/split/merge walk
 //!   ([`walk`], Algorithm 1, exact for any DAG walkable from the base), truncated SVD with a
 //!   rank check ([`linalg`], eq. 9), coupled compliance, accelerability (the paper's projection
-//!   or the exact `J M⁻¹ Jᵀ`), damping and the twist maps ([`construct`]);
+//!   or the exact `J M⁻¹ Jᵀ`), damping and the twist maps ([`construct`]); the wrench maps
+//!   (eqs. 15–20, Algorithm 2, [`wrench`]);
 //! - reduced dynamics (§6, [`dynamics`]): backward Euler with eq. 23's sign fixed, projected
 //!   Gauss–Seidel contact with Coulomb friction against [`obstacle`]s, a free base; internal
 //!   links in parallel ([`internal`]);
@@ -46,6 +47,7 @@ pub mod study;
 mod testutil;
 pub mod tol;
 pub mod walk;
+pub mod wrench;
 
 pub use construct::{ConstructOptions, MassModel, ReducedModel};
 pub use desc::{BaseDesc, JointDesc, JointKindDesc, LinkDesc, MechanismDesc, ShapeDesc};
@@ -54,3 +56,4 @@ pub use error::Error;
 pub use linalg::Tsvd;
 pub use mechanism::{Direction, Joint, Link, Mechanism, Shape};
 pub use obstacle::{HeightField, Obstacle};
+pub use wrench::WrenchMaps;

@@ -177,3 +177,128 @@ pub fn block_rel_error(a: &Mat<f64>, reference: &Mat<f64>, floor: f64) -> f64 {
     }
     worst
 }
+
+/// Builder state of [`random_diamonds`].
+struct Diamonds {
+    d: MechanismDesc,
+    pos: Vec<[f64; 3]>,
+    joints: usize,
+    leaves: Vec<usize>,
+}
+
+impl Diamonds {
+    fn name(l: usize) -> String {
+        if l == 0 {
+            "base".to_owned()
+        } else {
+            format!("l{l}")
+        }
+    }
+
+    fn link(&mut self, rng: &mut Xoshiro256PlusPlus, near: usize) -> usize {
+        let off = v3(rng, 0.6);
+        let p: [f64; 3] = core::array::from_fn(|k| self.pos[near][k] + off[k]);
+        self.pos.push(p);
+        let l = self.pos.len() - 1;
+        let m = rng.random_range(0.1..2.0);
+        self.d.link(
+            LinkDesc::new(&Self::name(l), p)
+                .mass(m, [m * 0.05, m * 0.04, m * 0.03])
+                .com(v3(rng, 0.1)),
+        );
+        l
+    }
+
+    /// A joint from `p` to `c`; `kinds` indexes hinge, slider, ball, weld.
+    fn joint(&mut self, rng: &mut Xoshiro256PlusPlus, p: usize, c: usize, kinds: &[usize]) {
+        let t = rng.random_range(0.0..1.0);
+        let j = v3(rng, 0.05);
+        let anchor =
+            core::array::from_fn(|k| self.pos[p][k] + t * (self.pos[c][k] - self.pos[p][k]) + j[k]);
+        let name = format!("j{}", self.joints);
+        self.joints += 1;
+        let (pn, cn) = (Self::name(p), Self::name(c));
+        let kind = kinds[rng.random_range(0..kinds.len())];
+        let joint = match kind {
+            0 => JointDesc::hinge(&name, &pn, &cn, anchor, unit(rng)),
+            1 => JointDesc::slider(&name, &pn, &cn, anchor, unit(rng)),
+            2 => JointDesc::ball(&name, &pn, &cn, anchor),
+            _ => JointDesc::weld(&name, &pn, &cn, anchor),
+        };
+        let dof = [1, 1, 3, 6][kind];
+        let c: Vec<f64> = (0..dof)
+            .map(|_| 10f64.powf(rng.random_range(-4.0..-1.0)))
+            .collect();
+        self.d.joint(joint.compliance(&c));
+    }
+
+    fn chain(&mut self, rng: &mut Xoshiro256PlusPlus, from: usize, len: usize) -> usize {
+        let mut at = from;
+        for _ in 0..len {
+            let c = self.link(rng, at);
+            self.joint(rng, at, c, &[0, 1, 2, 3]);
+            at = c;
+        }
+        at
+    }
+
+    fn block(&mut self, rng: &mut Xoshiro256PlusPlus, root: usize, depth: usize) {
+        let choice = if depth == 0 {
+            0
+        } else {
+            rng.random_range(0..3)
+        };
+        match choice {
+            0 => {
+                let len = rng.random_range(1..4);
+                let end = self.chain(rng, root, len);
+                if depth == 0 {
+                    self.leaves.push(end);
+                } else {
+                    self.block(rng, end, depth - 1);
+                }
+            }
+            1 => {
+                // Two chains from `root` welded at a merge link: tree joint from the first, a
+                // closing ball or weld from the second (random hinges and sliders around one
+                // short loop would often lock it).
+                let (la, lb) = (rng.random_range(1..3), rng.random_range(1..3));
+                let a = self.chain(rng, root, la);
+                let b = self.chain(rng, root, lb);
+                let k = self.link(rng, a);
+                self.joint(rng, a, k, &[0, 1, 2, 3]);
+                self.joint(rng, b, k, &[2, 3]);
+                self.block(rng, k, depth - 1);
+            }
+            _ => {
+                self.block(rng, root, depth - 1);
+                self.block(rng, root, depth - 1);
+            }
+        }
+    }
+}
+
+/// A random mechanism of nested "diamonds": chains, splits, and loops made of two chains from
+/// one link welded at a merge link, with everything else hanging below that merge, so that
+/// every load enters every loop through its merge link. End effectors: a random non-empty set
+/// of the leaves. Compliances log-uniform over three decades from 1e-4.
+pub fn random_diamonds(rng: &mut Xoshiro256PlusPlus, depth: usize) -> MechanismDesc {
+    let mut g = Diamonds {
+        d: MechanismDesc::new("diamonds"),
+        pos: vec![[0.0; 3]],
+        joints: 0,
+        leaves: Vec::new(),
+    };
+    g.d.link(LinkDesc::new("base", [0.0; 3]));
+    g.block(rng, 0, depth);
+    let mut chosen = g.leaves.clone();
+    let k = rng.random_range(1..=chosen.len());
+    while chosen.len() > k {
+        let i = rng.random_range(0..chosen.len());
+        chosen.remove(i);
+    }
+    for l in chosen {
+        g.d.end_effector(&Diamonds::name(l));
+    }
+    g.d
+}

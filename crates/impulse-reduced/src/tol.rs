@@ -68,3 +68,36 @@ pub const BLEND_STATIC_ITERATIONS: usize = 500;
 /// The blended statics stop when the end effectors move less than this in a pass (scaled
 /// twist norm, dimensionless: lengths over the bounding radius, angles over π).
 pub const BLEND_STATIC_TOLERANCE: f64 = 1e-13;
+
+/// Newton's stopping test for a step of the full dynamics reference
+/// ([`crate::reference::FullSim`]): the momentum residual relative to the largest momentum or
+/// impulse of the step, and the loop closure relative to the bounding radius (dimensionless).
+/// 1e-10 sits above the floor set by the central differences of `∂T/∂θ` (~1e-11 of the
+/// momentum, see [`FULL_FD_STEP`]) and moves a trajectory by far less than the first-order
+/// error of backward Euler itself.
+pub const FULL_RESIDUAL_REL: f64 = 1e-10;
+
+/// Newton iterations allowed per step of the full dynamics reference before
+/// [`crate::Error::NoConvergence`]. The tangent leaves out the Coriolis and load-stiffness
+/// terms, so convergence is linear at a rate `~h·|ω|`; 50 covers steps up to h = 1 s on the
+/// tested mechanisms.
+pub const FULL_MAX_ITERATIONS: usize = 50;
+
+/// Relative step of the central differences of the kinetic energy in the full dynamics
+/// reference (times `1 + |θ|`): truncation ~h² = 1e-12, rounding ~ε/h = 2e-10 of the kinetic
+/// energy per unit angle, entering the momentum balance multiplied by the time step.
+pub const FULL_FD_STEP: f64 = 1e-6;
+
+/// Largest number of velocity unknowns for which the full dynamics reference forms Newton's
+/// tangent by differences of the residual (one residual per column, `O(n·ndof)` each); above
+/// it the tangent is `M + hD + h²K` with the closure rows, which converges linearly.
+pub const FULL_EXACT_TANGENT_MAX: usize = 48;
+
+/// Relative step (times `1 + |v|`) of the forward differences that form the tangent of small
+/// full-dynamics systems: the residual carries ~1e-12 of noise from the differences of
+/// `∂T/∂θ`, so 1e-7 keeps the tangent accurate to ~1e-5, ample for Newton.
+pub const FULL_TANGENT_STEP: f64 = 1e-7;
+
+/// Times a step of the full dynamics reference may be halved when Newton stalls (so at most
+/// 2⁴ = 16 sub-steps); beyond that [`crate::Error::NoConvergence`] is reported.
+pub const FULL_MAX_HALVINGS: usize = 4;

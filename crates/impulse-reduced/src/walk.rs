@@ -42,6 +42,21 @@ pub struct WalkResult {
     /// Largest entry of any block formed before a constraint was applied: the size of the
     /// round-off the results carry (the `scale` of [`crate::linalg::pinv_scaled`]).
     pub scale: f64,
+    /// Every merge met, in walk order: the coupled matrix of its virtual links just before
+    /// they were welded (the `C` of eq. 16).
+    pub merges: Vec<MergeBlocks>,
+}
+
+/// The virtual links of one merge (eq. 13) as the walk saw them before welding them.
+#[derive(Clone, Debug)]
+pub struct MergeBlocks {
+    /// The merged link.
+    pub link: usize,
+    /// The joints into it (one virtual link each), in [`Mechanism::joints_in`] order.
+    pub joints: Vec<usize>,
+    /// `C_VV`: block (i, k) couples virtual links i and k (merged link's frame, eqs. 10, 12),
+    /// every earlier merge applied.
+    pub virtual_blocks: Vec<Vec<Mat6>>,
 }
 
 /// Per-joint input of the walk: the joint's body-frame motion columns in the child frame
@@ -123,6 +138,7 @@ pub fn walk(
         active: Vec::new(),
         scale: 0.0,
     };
+    let mut merges = Vec::new();
     // The base: zero compliance relative to itself.
     st.visited.push(m.base);
     if pending[m.base] > 0 {
@@ -174,7 +190,13 @@ pub fn walk(
             // Chain (eq. 10).
             (cdv.iter().map(|v| v[0]).collect::<Vec<_>>(), cvv[0][0])
         } else {
-            merge(&mut st, &cdv, &cvv, tsvd)?
+            let welded = merge(&mut st, &cdv, &cvv, tsvd)?;
+            merges.push(MergeBlocks {
+                link: c,
+                joints: ins.clone(),
+                virtual_blocks: cvv,
+            });
+            welded
         };
 
         for &ji in ins {
@@ -225,6 +247,7 @@ pub fn walk(
         to_end_effectors,
         diagonal: st.diagonal,
         scale: st.scale,
+        merges,
     })
 }
 

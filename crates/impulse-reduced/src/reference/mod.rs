@@ -7,13 +7,17 @@
 //! - [`linear`]: the linearised constrained statics (joint springs + loop closure) and its
 //!   Schur complement at the end effectors, the exact operational-space accelerability
 //!   `J M⁻¹ Jᵀ` (projected on the loop-closure null space);
+//! - [`dynamics`]: the full nonlinear dynamics, backward Euler in joint coordinates (free base
+//!   included) with loop closure at position level, solved by Newton;
 //! - [`statics`]: the nonlinear static equilibrium under end-effector loads, by Newton on the
 //!   force balance with loop-closure constraints (KKT, truncated SVD for redundant loops).
 
+pub mod dynamics;
 pub mod kinematics;
 pub mod linear;
 pub mod statics;
 
+pub use dynamics::{FullOptions, FullSim, FullStepReport};
 pub use kinematics::{Configuration, joint_motion};
 pub use linear::LinearStatics;
 pub use statics::{Load, StaticOptions, StaticSolution, solve_statics};
