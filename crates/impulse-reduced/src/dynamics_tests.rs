@@ -6,8 +6,9 @@ use glam::DVec3;
 
 use super::*;
 use crate::construct::{ConstructOptions, ReducedModel};
-use crate::desc::{BaseDesc, JointDesc, LinkDesc, MechanismDesc, ShapeDesc};
+use crate::desc::{JointDesc, LinkDesc, MechanismDesc, ShapeDesc};
 use crate::reference::Configuration;
+use crate::testutil::floating;
 
 /// Issue 14 acceptance: the hinge's numerical frequency within 1 % of √(k/I).
 const FREQUENCY_REL: f64 = 0.01;
@@ -91,26 +92,6 @@ fn backward_euler_never_gains_energy() {
         println!("h = {h} s: energy {e0:.3e} → {e:.3e} after 200 steps");
         assert!(e < e0);
     }
-}
-
-/// A free 2 kg body with one compliant arm and a tip, no gravity.
-fn floating(gravity: [f64; 3]) -> Mechanism {
-    let mut d = MechanismDesc::new("floating");
-    d.base(BaseDesc::Free).gravity(gravity);
-    d.link(
-        LinkDesc::new("body", [0.0; 3])
-            .mass(2.0, [0.02, 0.03, 0.04])
-            .com([0.01, 0.0, 0.0]),
-    )
-    .link(LinkDesc::new("arm", [0.2, 0.0, 0.0]).mass(0.1, [1e-3; 3]))
-    .link(LinkDesc::new("tip", [0.4, 0.0, 0.0]).mass(0.1, [1e-3; 3]))
-    .joint(JointDesc::ball("shoulder", "body", "arm", [0.1, 0.0, 0.0]).compliance(&[1e-2]))
-    .joint(
-        JointDesc::hinge("elbow", "arm", "tip", [0.3, 0.0, 0.0], [0.0, 0.0, 1.0])
-            .compliance(&[1e-2]),
-    )
-    .end_effector("tip");
-    d.build().unwrap()
 }
 
 #[test]

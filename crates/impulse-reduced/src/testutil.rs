@@ -5,7 +5,8 @@ use faer::Mat;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
-use crate::desc::{JointDesc, LinkDesc, MechanismDesc};
+use crate::desc::{BaseDesc, JointDesc, LinkDesc, MechanismDesc};
+use crate::mechanism::Mechanism;
 
 /// A seeded generator.
 pub fn rng(seed: u64) -> Xoshiro256PlusPlus {
@@ -18,6 +19,28 @@ fn v3(rng: &mut Xoshiro256PlusPlus, s: f64) -> [f64; 3] {
         rng.random_range(-s..s),
         rng.random_range(-s..s),
     ]
+}
+
+/// A joint of `kind` (0 hinge, 1 slider, 2 ball, 3 weld) named `[joint, parent, child]` at
+/// `anchor`, random axis, each free direction's compliance 10^x with x uniform in `decades`.
+fn random_joint(
+    rng: &mut Xoshiro256PlusPlus,
+    kind: usize,
+    [name, pn, cn]: [&str; 3],
+    anchor: [f64; 3],
+    decades: std::ops::Range<f64>,
+) -> JointDesc {
+    let joint = match kind {
+        0 => JointDesc::hinge(name, pn, cn, anchor, unit(rng)),
+        1 => JointDesc::slider(name, pn, cn, anchor, unit(rng)),
+        2 => JointDesc::ball(name, pn, cn, anchor),
+        _ => JointDesc::weld(name, pn, cn, anchor),
+    };
+    let dof = [1, 1, 3, 6][kind];
+    let c: Vec<f64> = (0..dof)
+        .map(|_| 10f64.powf(rng.random_range(decades.clone())))
+        .collect();
+    joint.compliance(&c)
 }
 
 fn unit(rng: &mut Xoshiro256PlusPlus) -> [f64; 3] {
@@ -71,17 +94,13 @@ pub fn random_mechanism(
         } else {
             rng.random_range(0..4)
         };
-        let joint = match kind {
-            0 => JointDesc::hinge(&name, &pn, &cn, anchor, unit(rng)),
-            1 => JointDesc::slider(&name, &pn, &cn, anchor, unit(rng)),
-            2 => JointDesc::ball(&name, &pn, &cn, anchor),
-            _ => JointDesc::weld(&name, &pn, &cn, anchor),
-        };
-        let dof = [1, 1, 3, 6][kind];
-        let c: Vec<f64> = (0..dof)
-            .map(|_| 10f64.powf(rng.random_range(-4.0..(decades - 4.0))))
-            .collect();
-        d.joint(joint.compliance(&c));
+        d.joint(random_joint(
+            rng,
+            kind,
+            [&name, &pn, &cn],
+            anchor,
+            -4.0..(decades - 4.0),
+        ));
     };
     let mut parent = vec![0usize];
     for i in 1..=n {
@@ -219,17 +238,9 @@ impl Diamonds {
         self.joints += 1;
         let (pn, cn) = (Self::name(p), Self::name(c));
         let kind = kinds[rng.random_range(0..kinds.len())];
-        let joint = match kind {
-            0 => JointDesc::hinge(&name, &pn, &cn, anchor, unit(rng)),
-            1 => JointDesc::slider(&name, &pn, &cn, anchor, unit(rng)),
-            2 => JointDesc::ball(&name, &pn, &cn, anchor),
-            _ => JointDesc::weld(&name, &pn, &cn, anchor),
-        };
-        let dof = [1, 1, 3, 6][kind];
-        let c: Vec<f64> = (0..dof)
-            .map(|_| 10f64.powf(rng.random_range(-4.0..-1.0)))
-            .collect();
-        self.d.joint(joint.compliance(&c));
+        let names = [name.as_str(), pn.as_str(), cn.as_str()];
+        self.d
+            .joint(random_joint(rng, kind, names, anchor, -4.0..-1.0));
     }
 
     fn chain(&mut self, rng: &mut Xoshiro256PlusPlus, from: usize, len: usize) -> usize {
@@ -301,4 +312,24 @@ pub fn random_diamonds(rng: &mut Xoshiro256PlusPlus, depth: usize) -> MechanismD
         g.d.end_effector(&Diamonds::name(l));
     }
     g.d
+}
+
+/// A free 2 kg body with a ball-jointed compliant arm and a hinged tip (the end effector).
+pub fn floating(gravity: [f64; 3]) -> Mechanism {
+    let mut d = MechanismDesc::new("floating");
+    d.base(BaseDesc::Free).gravity(gravity);
+    d.link(
+        LinkDesc::new("body", [0.0; 3])
+            .mass(2.0, [0.02, 0.03, 0.04])
+            .com([0.01, 0.0, 0.0]),
+    )
+    .link(LinkDesc::new("arm", [0.2, 0.0, 0.0]).mass(0.1, [1e-3; 3]))
+    .link(LinkDesc::new("tip", [0.4, 0.0, 0.0]).mass(0.1, [1e-3; 3]))
+    .joint(JointDesc::ball("shoulder", "body", "arm", [0.1, 0.0, 0.0]).compliance(&[1e-2]))
+    .joint(
+        JointDesc::hinge("elbow", "arm", "tip", [0.3, 0.0, 0.0], [0.0, 0.0, 1.0])
+            .compliance(&[1e-2]),
+    )
+    .end_effector("tip");
+    d.build().unwrap()
 }

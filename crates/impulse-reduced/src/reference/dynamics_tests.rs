@@ -8,7 +8,7 @@ use super::*;
 use crate::construct::{ConstructOptions, ReducedModel};
 use crate::desc::{JointDesc, LinkDesc, MechanismDesc};
 use crate::dynamics::ReducedSim;
-use crate::testutil::{random_mechanism, rng};
+use crate::testutil::{floating, random_mechanism, rng};
 
 /// Issue 14 acceptance: the hinge's numerical frequency within 1 % of √(k/I).
 const FREQUENCY_REL: f64 = 0.01;
@@ -194,26 +194,6 @@ const ENERGY_HORIZON: f64 = 0.02;
 const ENERGY_LOSS_MAX: f64 = 0.1;
 /// Ratio of the losses at h/2 and h for a first-order method.
 const HALVING_BAND: (f64, f64) = (0.4, 0.6);
-
-/// A free 2 kg body with a ball-jointed arm and a hinged tip.
-fn floating(gravity: [f64; 3]) -> Mechanism {
-    let mut d = MechanismDesc::new("floating");
-    d.base(BaseDesc::Free).gravity(gravity);
-    d.link(
-        LinkDesc::new("body", [0.0; 3])
-            .mass(2.0, [0.02, 0.03, 0.04])
-            .com([0.01, 0.0, 0.0]),
-    )
-    .link(LinkDesc::new("arm", [0.2, 0.0, 0.0]).mass(0.1, [1e-3; 3]))
-    .link(LinkDesc::new("tip", [0.4, 0.0, 0.0]).mass(0.1, [1e-3; 3]))
-    .joint(JointDesc::ball("shoulder", "body", "arm", [0.1, 0.0, 0.0]).compliance(&[1e-2]))
-    .joint(
-        JointDesc::hinge("elbow", "arm", "tip", [0.3, 0.0, 0.0], [0.0, 0.0, 1.0])
-            .compliance(&[1e-2]),
-    )
-    .end_effector("tip");
-    d.build().unwrap()
-}
 
 /// Without external forces the world momentum (linear and angular about the origin, summed
 /// over the links from their poses and twists) is constant; under gravity alone its linear
