@@ -333,3 +333,23 @@ pub fn floating(gravity: [f64; 3]) -> Mechanism {
     .end_effector("tip");
     d.build().unwrap()
 }
+
+/// A rod on a hinge about z through the origin: mass 1 kg, COM 0.5 m out, 0.01 kg·m² about the
+/// COM, so I = 0.26 kg·m² about the hinge; no gravity; `damping` as [`JointDesc::damping`]
+/// (empty: none).
+pub fn hinge_rod(compliance: f64, damping: &[f64]) -> Mechanism {
+    let mut d = MechanismDesc::new("hinge");
+    d.link(LinkDesc::new("base", [0.0; 3]))
+        .link(
+            LinkDesc::new("rod", [0.0; 3])
+                .mass(1.0, [0.01; 3])
+                .com([0.5, 0.0, 0.0]),
+        )
+        .joint(
+            JointDesc::hinge("h", "base", "rod", [0.0; 3], [0.0, 0.0, 1.0])
+                .compliance(&[compliance])
+                .damping(damping),
+        )
+        .end_effector("rod");
+    d.build().unwrap()
+}

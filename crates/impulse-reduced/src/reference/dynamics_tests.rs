@@ -6,9 +6,8 @@ use rand::RngExt;
 
 use super::*;
 use crate::construct::{ConstructOptions, ReducedModel};
-use crate::desc::{JointDesc, LinkDesc, MechanismDesc};
 use crate::dynamics::ReducedSim;
-use crate::testutil::{floating, random_mechanism, rng};
+use crate::testutil::{floating, hinge_rod, random_mechanism, rng};
 
 /// Issue 14 acceptance: the hinge's numerical frequency within 1 % of √(k/I).
 const FREQUENCY_REL: f64 = 0.01;
@@ -33,29 +32,11 @@ const SMALL_LOAD_REL: f64 = 1e-2;
 /// mechanism: sliders only), and the slope is not judged.
 const EXACT_AGREEMENT: f64 = 1e-10;
 
-/// A rod on a hinge about z through the origin: mass 1 kg, COM 0.5 m out, 0.01 kg·m² about the
-/// COM, so I = 0.26 kg·m² about the hinge. No gravity.
-fn hinge_rod(compliance: f64) -> Mechanism {
-    let mut d = MechanismDesc::new("hinge");
-    d.link(LinkDesc::new("base", [0.0; 3]))
-        .link(
-            LinkDesc::new("rod", [0.0; 3])
-                .mass(1.0, [0.01; 3])
-                .com([0.5, 0.0, 0.0]),
-        )
-        .joint(
-            JointDesc::hinge("h", "base", "rod", [0.0; 3], [0.0, 0.0, 1.0])
-                .compliance(&[compliance]),
-        )
-        .end_effector("rod");
-    d.build().unwrap()
-}
-
 #[test]
 fn single_hinge_vibrates_at_sqrt_k_over_i() {
     let (c, inertia): (f64, f64) = (1e-2, 0.26);
     let period = 2.0 * PI / (1.0 / c / inertia).sqrt();
-    let m = hinge_rod(c);
+    let m = hinge_rod(c, &[]);
     let mut s = FullSim::new(&m, period / 1000.0, FullOptions::default()).unwrap();
     s.config.theta[0] = 1e-2;
     let mut crossings = Vec::new();
@@ -323,7 +304,7 @@ fn reduced_model_follows_the_full_model_at_small_amplitude() {
 
 #[test]
 fn bad_input_is_an_error() {
-    let m = hinge_rod(1e-2);
+    let m = hinge_rod(1e-2, &[]);
     assert!(FullSim::new(&m, 0.0, FullOptions::default()).is_err());
     assert!(FullSim::new(&m, f64::NAN, FullOptions::default()).is_err());
     let mut s = FullSim::new(&m, 1e-3, FullOptions::default()).unwrap();

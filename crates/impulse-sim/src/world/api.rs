@@ -179,17 +179,7 @@ impl World {
             if j < old.len() || !(all[i].is_dynamic() || all[j].is_dynamic()) {
                 continue; // two old bodies, or two that never collide (fixed walls may overlap)
             }
-            let (a, b) = (all[i], all[j]);
-            if let Some((p, _)) = depth::shape_penetration(&a.shape, &a.pose, &b.shape, &b.pose) {
-                if p.depth > eps {
-                    return Err(SimError::Overlap {
-                        a: a.name.clone(),
-                        b: b.name.clone(),
-                        depth: p.depth,
-                        collision_epsilon: eps,
-                    });
-                }
-            }
+            refuse_overlap(all[i], all[j], eps)?;
         }
         Ok(())
     }
@@ -350,18 +340,7 @@ impl World {
             {
                 continue;
             }
-            if let Some((p, _)) =
-                depth::shape_penetration(&moved.shape, &moved.pose, &o.shape, &o.pose)
-            {
-                if p.depth > eps {
-                    return Err(SimError::Overlap {
-                        a: moved.name.clone(),
-                        b: o.name.clone(),
-                        depth: p.depth,
-                        collision_epsilon: eps,
-                    });
-                }
-            }
+            refuse_overlap(&moved, o, eps)?;
         }
         let fixed = moved.kind == BodyKind::Fixed;
         *self.b_mut(i) = moved;
@@ -589,3 +568,17 @@ impl World {
 
 #[cfg(test)]
 mod tests;
+
+/// [`SimError::Overlap`] naming `a` and `b` if they overlap by more than `eps` (touching, or
+/// overlapping by less, is contact).
+fn refuse_overlap(a: &Body, b: &Body, eps: f64) -> Result<(), SimError> {
+    match depth::shape_penetration(&a.shape, &a.pose, &b.shape, &b.pose) {
+        Some((p, _)) if p.depth > eps => Err(SimError::Overlap {
+            a: a.name.clone(),
+            b: b.name.clone(),
+            depth: p.depth,
+            collision_epsilon: eps,
+        }),
+        _ => Ok(()),
+    }
+}
