@@ -47,8 +47,11 @@ use glam::{DMat3, DVec2, DVec3};
 
 use crate::{Body, ContactFrame, ResponseError, collision_matrix_world, relative_contact_velocity};
 
+mod direct;
 #[cfg(test)]
 mod tests;
+
+pub use direct::{LAW_SLACK, MAX_ROUNDS, REGULARISATION};
 
 /// One body of an island, as the solver sees it: mass properties, centre of mass and velocity,
 /// all in world axes. The solver changes `velocity` and `omega` in place.
@@ -94,6 +97,10 @@ pub struct SolverSettings {
     /// Convergence tolerance, a speed (length/time): the solve stops when a whole sweep
     /// changed no contact velocity by more than this (default 1e-9 m/s).
     pub tolerance: f64,
+    /// After this many sweeps without convergence, a direct solve on the active set the
+    /// sweeps found (`direct.rs`: tall stacks), then sweeps again; tried again every as many
+    /// sweeps until one is taken. `None` (the default): sweeps only.
+    pub direct_after: Option<usize>,
 }
 
 impl Default for SolverSettings {
@@ -101,6 +108,7 @@ impl Default for SolverSettings {
         Self {
             max_iterations: DEFAULT_MAX_ITERATIONS,
             tolerance: DEFAULT_TOLERANCE,
+            direct_after: None,
         }
     }
 }
@@ -121,6 +129,8 @@ pub struct SolveReport {
     pub residual: f64,
     /// Whether the residual fell to the tolerance.
     pub converged: bool,
+    /// Whether a direct solve on the active set was taken ([`SolverSettings::direct_after`]).
+    pub direct: bool,
 }
 
 /// A contact's precomputed geometry: frame, offsets, collision matrix.
@@ -163,6 +173,7 @@ pub fn solve_contacts(
         iterations: 0,
         residual: f64::INFINITY,
         converged: contacts.is_empty(),
+        direct: false,
     };
     while !report.converged && report.iterations < settings.max_iterations {
         let mut residual = 0.0_f64;
@@ -172,6 +183,12 @@ pub fn solve_contacts(
         report.iterations += 1;
         report.residual = residual;
         report.converged = residual <= settings.tolerance;
+        let due = settings
+            .direct_after
+            .is_some_and(|k| k > 0 && report.iterations % k == 0);
+        if !report.converged && !report.direct && due {
+            report.direct = direct::solve_active_set(bodies, contacts, &rows, settings.tolerance);
+        }
     }
     if contacts.is_empty() {
         report.residual = 0.0;

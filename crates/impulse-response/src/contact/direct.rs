@@ -1,0 +1,303 @@
+//! A direct solve of the contact problem on the active set Gauss–Seidel found, for islands
+//! where Gauss–Seidel converges too slowly (tall stacks: a load travels one contact per sweep).
+//!
+//! Gauss–Seidel's iterate, even far from converged, usually has the right *active set*: which
+//! contacts press (p_n > 0), which of those stick (‖p_t‖ < μ p_n) and which slide (on the
+//! cone's rim, in a direction d). On that set the contact problem is linear:
+//! - a sticking contact has three unknowns (p_t1, p_t2, p_n) and three equations u = (0, 0,
+//!   u_target);
+//! - a sliding contact has one unknown p_n, its friction fixed at p_t = μ·p_n·d, and one
+//!   equation u_n = u_target;
+//! - a contact that does not press has neither.
+//!
+//! With u = u_now + W·ΔP (W the island's Delassus matrix, built here column by column from
+//! the bodies' mass properties, only between contacts that share a body), this is one square
+//! linear system, solved by LU with a tiny Tikhonov term ([`REGULARISATION`]) because an
+//! interface of four corners has more contact rows than the six relative degrees of freedom
+//! of two bodies (the redundant rows make W singular). The result is checked against the
+//! laws (p_n ≥ 0, ‖p_t‖ ≤ μ p_n, u_n ≥ u_target where nothing presses); a contact that
+//! breaks one changes class and the system is solved again, up to [`MAX_ROUNDS`] times. The
+//! caller keeps sweeping afterwards, so the laws are Gauss–Seidel's to enforce in the end;
+//! the direct solve only brings the iterate next to the solution in one stroke.
+//!
+//! Cost: O(m³) for m unknowns (3 per sticking contact): about 2·10⁷ flops for a stack of 32
+//! blocks on 4 corners each; called only when Gauss–Seidel has not converged after
+//! [`super::SolverSettings::direct_after`] sweeps, which in a time-stepping loop means while
+//! an island's loads change, not while it rests (its warm start is then already the solution).
+
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+use glam::{DVec2, DVec3};
+
+use super::{Contact, IslandBody, Row, apply, contact_velocity};
+
+/// Tikhonov term of the direct solve, relative to W's largest diagonal entry: far below any
+/// physical compliance, far above the rounding that makes a redundant system's LU break
+/// down. Default `1e-10`.
+pub const REGULARISATION: f64 = 1e-10;
+
+/// Most active-set corrections of one direct solve. Default `16`.
+pub const MAX_ROUNDS: usize = 16;
+
+/// Relative slack of the checks of the laws (a normal impulse may be this fraction of the
+/// largest one below zero, a friction impulse this fraction outside its cone). Default
+/// `1e-9`.
+pub const LAW_SLACK: f64 = 1e-9;
+
+#[derive(Clone, Copy, PartialEq)]
+enum Class {
+    Off,
+    Stick,
+    Slide(DVec2),
+}
+
+impl Class {
+    fn unknowns(self) -> usize {
+        match self {
+            Class::Off => 0,
+            Class::Stick => 3,
+            Class::Slide(_) => 1,
+        }
+    }
+}
+
+/// Tries to jump to the solution on Gauss–Seidel's active set (or, failing that, on the set
+/// where every contact sticks); applies the impulse change to
+/// the bodies and contacts and returns true when the result keeps the laws (a contact that
+/// does not press may not approach faster than `tolerance` below its target), else changes
+/// nothing and returns false.
+pub(super) fn solve_active_set(
+    bodies: &mut [IslandBody],
+    contacts: &mut [Contact],
+    rows: &[Row],
+    tolerance: f64,
+) -> bool {
+    let n = contacts.len();
+    if n == 0 {
+        return false;
+    }
+    let guess: Vec<Class> = contacts
+        .iter()
+        .map(|c| {
+            let p_t = DVec2::new(c.impulse.x, c.impulse.y);
+            let cone = c.friction * c.impulse.z;
+            if c.impulse.z <= 0.0 {
+                Class::Off
+            } else if p_t.length() < cone * (1.0 - LAW_SLACK) || p_t.length() == 0.0 {
+                Class::Stick
+            } else {
+                Class::Slide(p_t / p_t.length())
+            }
+        })
+        .collect();
+    // Gauss–Seidel's classes first; failing those, every contact sticking (an island at
+    // rest, whose iterate was too far from converged to tell).
+    solve_from(bodies, contacts, rows, tolerance, guess)
+        || solve_from(bodies, contacts, rows, tolerance, vec![Class::Stick; n])
+}
+
+/// [`solve_active_set`] from the classes `class`.
+fn solve_from(
+    bodies: &mut [IslandBody],
+    contacts: &mut [Contact],
+    rows: &[Row],
+    tolerance: f64,
+    mut class: Vec<Class>,
+) -> bool {
+    let n = contacts.len();
+    // Contacts that share a body (the only non-zero blocks of W).
+    let mut by_body: Vec<Vec<usize>> = vec![Vec::new(); bodies.len()];
+    for (k, c) in contacts.iter().enumerate() {
+        by_body[c.body1].push(k);
+        if let Some(j) = c.body2 {
+            by_body[j].push(k);
+        }
+    }
+    let u_now: Vec<DVec3> = contacts
+        .iter()
+        .zip(rows)
+        .map(|(c, r)| contact_velocity(bodies, c, r))
+        .collect();
+    let p_max = contacts
+        .iter()
+        .map(|c| c.impulse.z)
+        .fold(0.0_f64, f64::max)
+        .max(f64::MIN_POSITIVE);
+    for _ in 0..MAX_ROUNDS {
+        let mut offset = vec![usize::MAX; n];
+        let mut m = 0;
+        for k in 0..n {
+            if class[k].unknowns() > 0 {
+                offset[k] = m;
+                m += class[k].unknowns();
+            }
+        }
+        if m == 0 {
+            return false;
+        }
+        let mut a = Mat::<f64>::zeros(m, m);
+        let mut rhs = Mat::<f64>::zeros(m, 1);
+        // Every non-zero response (contact, column, velocity change), Off contacts included:
+        // their velocities after the solve say whether they must press.
+        let mut entries: Vec<(usize, usize, DVec3)> = Vec::new();
+        // Columns: the response of every neighbouring contact to one unknown's impulse.
+        for j in 0..n {
+            let dirs: Vec<DVec3> = match class[j] {
+                Class::Off => continue,
+                Class::Stick => vec![DVec3::X, DVec3::Y, DVec3::Z],
+                Class::Slide(d) => {
+                    let mu = contacts[j].friction;
+                    vec![DVec3::new(mu * d.x, mu * d.y, 1.0)]
+                }
+            };
+            let mut near: Vec<usize> = by_body[contacts[j].body1].clone();
+            if let Some(b) = contacts[j].body2 {
+                near.extend(&by_body[b]);
+            }
+            near.sort_unstable();
+            near.dedup();
+            for (q, dir) in dirs.iter().enumerate() {
+                let col = offset[j] + q;
+                let p = rows[j].frame.to_world(*dir);
+                for &i in &near {
+                    let du = response(bodies, contacts, rows, i, j, p);
+                    entries.push((i, col, du));
+                    match class[i] {
+                        Class::Stick => {
+                            for r in 0..3 {
+                                a[(offset[i] + r, col)] += du[r];
+                            }
+                        }
+                        Class::Slide(_) => a[(offset[i], col)] += du.z,
+                        Class::Off => {}
+                    }
+                }
+            }
+        }
+        for k in 0..n {
+            let target = contacts[k].target_normal_velocity;
+            match class[k] {
+                Class::Off => {}
+                Class::Stick => {
+                    rhs[(offset[k], 0)] = -u_now[k].x;
+                    rhs[(offset[k] + 1, 0)] = -u_now[k].y;
+                    rhs[(offset[k] + 2, 0)] = target - u_now[k].z;
+                }
+                Class::Slide(_) => rhs[(offset[k], 0)] = target - u_now[k].z,
+            }
+        }
+        let diag = (0..m).map(|i| a[(i, i)].abs()).fold(0.0_f64, f64::max);
+        for i in 0..m {
+            a[(i, i)] += REGULARISATION * diag;
+        }
+        let x = a.partial_piv_lu().solve(&rhs);
+        if !(0..m).all(|i| x[(i, 0)].is_finite()) {
+            return false;
+        }
+        // The new impulses, and the laws.
+        let new: Vec<DVec3> = (0..n)
+            .map(|k| {
+                let p = contacts[k].impulse;
+                match class[k] {
+                    Class::Off => DVec3::new(0.0, 0.0, 0.0),
+                    Class::Stick => {
+                        p + DVec3::new(
+                            x[(offset[k], 0)],
+                            x[(offset[k] + 1, 0)],
+                            x[(offset[k] + 2, 0)],
+                        )
+                    }
+                    Class::Slide(d) => {
+                        let p_n = p.z + x[(offset[k], 0)];
+                        let mu = contacts[k].friction;
+                        DVec3::new(mu * p_n * d.x, mu * p_n * d.y, p_n)
+                    }
+                }
+            })
+            .collect();
+        let mut u_after = u_now.clone();
+        for &(i, col, du) in &entries {
+            u_after[i] += du * x[(col, 0)];
+        }
+        let mut changed = false;
+        for k in 0..n {
+            let c = &contacts[k];
+            let u_t = DVec2::new(u_after[k].x, u_after[k].y);
+            match class[k] {
+                Class::Off if u_after[k].z < c.target_normal_velocity - tolerance => {
+                    class[k] = Class::Stick;
+                    changed = true;
+                }
+                // Sliding friction must oppose the slip it finds; slip that stopped or turned
+                // means the contact sticks.
+                Class::Slide(d) if u_t.dot(d) > -tolerance => {
+                    class[k] = Class::Stick;
+                    changed = true;
+                }
+                _ => {}
+            }
+        }
+        for k in 0..n {
+            let p = new[k];
+            let cone = contacts[k].friction * p.z;
+            match class[k] {
+                Class::Stick | Class::Slide(_) if p.z < -LAW_SLACK * p_max => {
+                    class[k] = Class::Off;
+                    changed = true;
+                }
+                Class::Stick => {
+                    let p_t = DVec2::new(p.x, p.y);
+                    if p_t.length() > cone * (1.0 + LAW_SLACK) + LAW_SLACK * p_max {
+                        class[k] = Class::Slide(p_t / p_t.length());
+                        changed = true;
+                    }
+                }
+                _ => {}
+            }
+        }
+        if changed {
+            continue;
+        }
+        // Accept: apply the change of every contact's impulse.
+        for k in 0..n {
+            let dp = new[k] - contacts[k].impulse;
+            apply(bodies, &contacts[k], &rows[k], dp);
+            contacts[k].impulse = new[k];
+        }
+        return true;
+    }
+    false
+}
+
+/// The change of contact `i`'s velocity (its frame) when world impulse `p` acts at contact
+/// `j` (+p on its body 1, −p on its body 2).
+fn response(
+    bodies: &[IslandBody],
+    contacts: &[Contact],
+    rows: &[Row],
+    i: usize,
+    j: usize,
+    p: DVec3,
+) -> DVec3 {
+    let (ci, cj) = (&contacts[i], &contacts[j]);
+    let mut du = DVec3::ZERO;
+    // Each body of contact j that is also a body of contact i.
+    let bodies_j = [
+        (Some(cj.body1), 1.0, rows[j].r1),
+        (cj.body2, -1.0, rows[j].r2),
+    ];
+    let bodies_i = [
+        (Some(ci.body1), 1.0, rows[i].r1),
+        (ci.body2, -1.0, rows[i].r2),
+    ];
+    for &(bj, sj, rj) in &bodies_j {
+        let Some(bj) = bj else { continue };
+        let (dv, dw) = bodies[bj].body.velocity_change(rj, p * sj);
+        for &(bi, si, ri) in &bodies_i {
+            if bi == Some(bj) {
+                du += si * (dv + dw.cross(ri));
+            }
+        }
+    }
+    rows[i].frame.to_contact(du)
+}
