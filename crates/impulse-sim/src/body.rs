@@ -120,6 +120,13 @@ pub struct Body {
     pub script: Option<Motion>,
     /// Step size the rotation integrator found last (s), to start the next interval with.
     step_hint: f64,
+    /// The contact force an island holds on the body over its current step (world, through
+    /// the centre of mass; the switching contact model, `crate::sustained`).
+    pub(crate) held_force: DVec3,
+    /// The contact torque an island holds on the body over its current step (world).
+    pub(crate) held_torque: DVec3,
+    /// Asleep: at rest in a sleeping island, it does not move until woken.
+    pub(crate) asleep: bool,
 }
 
 impl Body {
@@ -156,6 +163,9 @@ impl Body {
             material,
             script,
             step_hint: 0.0,
+            held_force: DVec3::ZERO,
+            held_torque: DVec3::ZERO,
+            asleep: false,
         }
     }
 
@@ -189,6 +199,29 @@ impl Body {
     #[must_use]
     pub fn max_reach(&self) -> f64 {
         self.reach.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// The contact force and torque an island holds on the body over its current step (world;
+    /// zero outside islands, see [`crate::sustained`]).
+    #[must_use]
+    pub fn contact_load(&self) -> (DVec3, DVec3) {
+        (self.held_force, self.held_torque)
+    }
+
+    /// Whether the body sleeps in an island at rest ([`crate::sustained`]).
+    #[must_use]
+    pub fn is_asleep(&self) -> bool {
+        self.asleep
+    }
+
+    /// External force plus the contact force an island holds (world).
+    fn total_force(&self) -> DVec3 {
+        self.force + self.held_force
+    }
+
+    /// External torque plus the contact torque an island holds (world).
+    fn total_torque(&self) -> DVec3 {
+        self.torque + self.held_torque
     }
 
     /// True for a dynamic (ballistic) body.
@@ -270,12 +303,17 @@ impl Body {
         }
     }
 
-    /// The constant acceleration of the centre of mass: gravity plus the external force over
-    /// the mass (gravity alone for fixed and scripted bodies).
+    /// The constant acceleration of the centre of mass: gravity plus the external and held
+    /// contact force over the mass (gravity alone for fixed and scripted bodies; zero for a
+    /// sleeping body).
     #[must_use]
     pub fn acceleration(&self, gravity: DVec3) -> DVec3 {
+        if self.asleep {
+            return DVec3::ZERO;
+        }
+        let f = self.total_force();
         match self.mass {
-            Some(m) if self.force != DVec3::ZERO => gravity + self.force / m.mass,
+            Some(m) if f != DVec3::ZERO => gravity + f / m.mass,
             _ => gravity,
         }
     }
@@ -292,13 +330,15 @@ impl Body {
         match self.kind {
             BodyKind::Fixed => Motion::Fixed { com },
             BodyKind::Scripted => self.script.unwrap_or(Motion::Fixed { com }),
+            BodyKind::Dynamic if self.asleep => Motion::Fixed { com },
             BodyKind::Dynamic => {
                 let Some(m) = self.mass else {
                     return Motion::Unbounded { com };
                 };
                 let wb = self.pose.rotation.inverse() * self.omega;
                 let acc = self.acceleration(gravity);
-                let torqued = self.torque != DVec3::ZERO;
+                let torque = self.total_torque();
+                let torqued = torque != DVec3::ZERO;
                 let omega_max = if torqued {
                     impulse_collide::motion::omega_max_momentum(m.moments, wb)
                 } else {
@@ -308,7 +348,7 @@ impl Body {
                     .and_then(|w| Ballistic::new(com, self.velocity, acc, w))
                     .and_then(|b| {
                         if torqued {
-                            b.with_omega_growth(self.torque.length() / m.moments.min_element())
+                            b.with_omega_growth(torque.length() / m.moments.min_element())
                         } else {
                             Ok(b)
                         }
@@ -369,6 +409,7 @@ impl Body {
                     self.script = Some(script.advance(dt).map_err(|_| AdvanceError::NonFinite)?);
                 }
             }
+            BodyKind::Dynamic if self.asleep => {}
             BodyKind::Dynamic => {
                 let acc = self.acceleration(gravity);
                 let com = self.pose.translation + self.velocity * dt + acc * (0.5 * dt * dt);
@@ -391,7 +432,7 @@ impl Body {
             return Ok(self.pose.rotation);
         };
         let q0 = self.pose.rotation;
-        let tau = self.torque;
+        let tau = self.total_torque();
         if self.omega == DVec3::ZERO && tau == DVec3::ZERO {
             return Ok(q0);
         }

@@ -43,8 +43,16 @@ impl SceneDesc {
             default_contact: ContactDesc::default(),
             contacts: Vec::new(),
             accuracy: AccuracyDesc::default(),
+            contact_model: crate::sustained::ContactMode::default(),
             bodies: Vec::new(),
         }
+    }
+
+    /// Sets how contacts are modelled ([`crate::sustained`]).
+    #[must_use]
+    pub fn with_contact_model(mut self, mode: crate::sustained::ContactMode) -> Self {
+        self.contact_model = mode;
+        self
     }
 
     /// Sets the name.

@@ -81,7 +81,7 @@ pub enum ContactKind {
 }
 
 /// The response's view of a body.
-fn response_body(b: &Body) -> impulse_response::Body {
+pub(crate) fn response_body(b: &Body) -> impulse_response::Body {
     if b.is_dynamic() {
         impulse_response::Body::Moving {
             inverse_mass: b.inverse_mass(),

@@ -51,12 +51,14 @@ mod error;
 pub mod monitor;
 pub mod record;
 pub mod scene;
+pub mod sustained;
 pub mod world;
 
 pub use error::SimError;
 pub use monitor::{PenetrationMonitor, PenetrationReport};
 pub use record::{Frame, Recording, run};
 pub use scene::{Scene, SceneDesc};
+pub use sustained::{ContactMode, SustainedSettings};
 pub use world::{
     BodyHandle, BodyState, ContactEvent, ContactFailure, Counters, Load, LoadFn, Material,
     StepReport, World, WorldSettings,

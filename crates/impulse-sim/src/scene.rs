@@ -70,6 +70,11 @@ pub struct SceneDesc {
     /// Solver settings.
     #[serde(default)]
     pub accuracy: AccuracyDesc,
+    /// How contacts are modelled: `Impulse` (every contact an impulse, thesis chapters 2–3)
+    /// or `Switching` (impacts as impulses, sustained contact as constraints, thesis §8.1;
+    /// [`crate::sustained`]). Default `Impulse`.
+    #[serde(default)]
+    pub contact_model: crate::sustained::ContactMode,
     /// The bodies.
     pub bodies: Vec<BodyDesc>,
 }

@@ -270,6 +270,7 @@ impl World {
         for p in self.heap.pairs_of(i).collect::<Vec<_>>() {
             self.heap.remove(p);
         }
+        self.release_all_of(i);
         self.pairs.retain(|&(a, b), _| a != i && b != i);
         self.loads.retain(|l| l.body != i);
         self.stale.retain(|&s| s != i);
@@ -546,10 +547,17 @@ impl World {
         if !self.stale.contains(&i) {
             self.stale.push(i);
         }
+        // A change by the program (or a load) wakes a sleeping island and is a transient for
+        // an awake one: its island steps now.
+        self.wake(i);
+        if self.is_held_body(i) {
+            self.islands.next_step = self.islands.next_step.min(self.time);
+        }
     }
 
     /// Forgets the cached features and normals of every pair of body `i` (it was moved).
     fn forget_pair_states(&mut self, i: u32) {
+        self.release_all_of(i);
         for (pair, state) in &mut self.pairs {
             if pair.0 == i || pair.1 == i {
                 *state = super::PairState::default();

@@ -218,9 +218,27 @@ impl World {
     pub(super) fn check_top(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
         let scan = self.query(pair);
         let mut hit = false;
+        let mut held = false;
         if scan.distance < self.collision_epsilon() {
             if let Some(n) = scan.normal {
-                if let Some(x) = self.contact_point(pair, &scan, n) {
+                let x = self.contact_point(pair, &scan, n);
+                let mid = 0.5 * (scan.point_a + scan.point_b);
+                // In the switching model a pair that is neither approaching nor separating
+                // faster than the switching speed is held, pressing or not (a body placed
+                // touching, or sliding along a surface, is in sustained contact from now).
+                let hold = self.holds(pair, x.unwrap_or(mid), n);
+                if hold || x.is_some() {
+                    // A sleeping island touched by something approaching wakes first.
+                    let mut woken = self.wake(pair.0);
+                    woken.extend(self.wake(pair.1));
+                    if !woken.is_empty() {
+                        self.rekey(&woken, Some(pair))?;
+                    }
+                }
+                if hold {
+                    self.hold(pair);
+                    held = true;
+                } else if let Some(x) = x {
                     hit = self.resolve(pair, x, n, scan.distance);
                 }
             }
@@ -230,7 +248,9 @@ impl World {
         if hit {
             self.rekey_others(pair)?;
         }
-        let key = if hit {
+        let key = if held {
+            f64::INFINITY
+        } else if hit {
             let scan = self.query(pair);
             self.key_for(pair, &scan, true)
         } else {
@@ -292,6 +312,22 @@ impl World {
         Some(pressing.iter().sum::<DVec3>() / pressing.len() as f64)
     }
 
+    /// Whether a contact found at `x` along `n` becomes a held (sustained) contact instead of
+    /// a collision: in the switching model, when a body of the pair is dynamic and the
+    /// contact neither approaches nor separates faster than the switching speed
+    /// ([`crate::sustained`]).
+    fn holds(&self, (a, b): (u32, u32), x: DVec3, n: DVec3) -> bool {
+        if !self.switching() {
+            return false;
+        }
+        let (ba, bb) = (self.b(a), self.b(b));
+        if !(ba.is_dynamic() || bb.is_dynamic()) {
+            return false;
+        }
+        let approach = -(ba.point_velocity(x) - bb.point_velocity(x)).dot(n);
+        approach.abs() < self.switch_speed()
+    }
+
     /// After an impulse on a pair, every other heap pair of its two bodies is stale (thesis
     /// §2.4.3) — of the bodies whose motion the impulse changed: a fixed or scripted body's
     /// pairs stay valid.
@@ -312,7 +348,7 @@ impl World {
         let mut pairs: Vec<(u32, u32)> = bodies
             .iter()
             .flat_map(|&b| self.heap.pairs_of(b))
-            .filter(|p| Some(*p) != except)
+            .filter(|p| Some(*p) != except && !self.is_held(*p))
             .collect();
         pairs.sort_unstable();
         pairs.dedup();
@@ -463,7 +499,7 @@ impl World {
         self.check_top(pair)
     }
 
-    fn material(&self, i: u32, j: u32) -> Material {
+    pub(super) fn material(&self, i: u32, j: u32) -> Material {
         self.materials.get(self.b(i).material, self.b(j).material)
     }
 

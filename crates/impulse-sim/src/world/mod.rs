@@ -42,6 +42,7 @@
 
 mod api;
 mod check;
+mod island;
 mod materials;
 mod step;
 
@@ -62,6 +63,7 @@ use crate::contact::{ContactKind, ContactModel};
 use crate::error::SimError;
 use crate::monitor::PenetrationMonitor;
 use crate::scene::{Scene, SceneDesc};
+use crate::sustained::{ContactMode, SustainedSettings};
 use materials::Materials;
 
 /// Checks in a row that may happen without simulated time advancing before the loop gives the
@@ -140,6 +142,13 @@ pub struct Counters {
     /// Largest penetration depth the loop itself found at a check (length). A diagnostic of
     /// the loop; the guarantee is measured from outside by [`PenetrationMonitor`].
     pub max_penetration: f64,
+    /// Island steps taken (the switching contact model, [`crate::sustained`]; one per awake
+    /// island).
+    pub island_steps: u64,
+    /// Transients resolved by an impulsive solve of an island.
+    pub transients: u64,
+    /// Islands put to sleep.
+    pub sleeps: u64,
 }
 
 /// One resolved contact ([`World::contacts`], [`World::set_event_log`]).
@@ -227,6 +236,11 @@ pub struct WorldSettings {
     pub integrator: Integrator,
     /// The contact model (collision tolerance, microcollision parameters).
     pub contact_model: ContactModel,
+    /// Impulses only, or impulses for impacts and constraints for sustained contact
+    /// ([`crate::sustained`]).
+    pub contact_mode: ContactMode,
+    /// Settings of the switching contact model.
+    pub sustained: SustainedSettings,
     /// Directory that relative paths of bodies added later (OBJ files) resolve against.
     pub base_dir: PathBuf,
 }
@@ -244,6 +258,8 @@ impl WorldSettings {
             },
             integrator: Integrator::default(),
             contact_model: ContactModel::default(),
+            contact_mode: ContactMode::default(),
+            sustained: SustainedSettings::default(),
             base_dir: PathBuf::from("."),
         }
     }
@@ -266,6 +282,8 @@ impl WorldSettings {
                 max_restitution: desc.accuracy.max_restitution,
                 reversing: desc.accuracy.reversing,
             },
+            contact_mode: desc.contact_model,
+            sustained: SustainedSettings::default(),
             base_dir: PathBuf::from("."),
         }
     }
@@ -357,6 +375,8 @@ pub struct World {
     checking: Option<PenetrationMonitor>,
     /// Scratch: the moving bodies' motions in the current step (id, motion, box growth).
     moving: Vec<(u32, impulse_collide::Motion, f64)>,
+    /// Contact islands of the switching model.
+    islands: island::Islands,
     #[cfg(test)]
     pub(crate) faults: Faults,
 }
@@ -412,6 +432,10 @@ impl World {
             .contact_model
             .validate()
             .map_err(|p| bad("contact_model", p))?;
+        settings
+            .sustained
+            .validate()
+            .map_err(|p| bad("sustained", p))?;
         Ok(Self {
             slots: Vec::new(),
             free: Vec::new(),
@@ -440,6 +464,7 @@ impl World {
             stale: Vec::new(),
             checking: None,
             moving: Vec::new(),
+            islands: island::Islands::new(settings.contact_mode, settings.sustained),
             #[cfg(test)]
             faults: Faults::default(),
         })
@@ -676,3 +701,6 @@ impl World {
         self.b(a).is_dynamic() || self.b(b).is_dynamic()
     }
 }
+
+#[cfg(test)]
+mod island_tests;

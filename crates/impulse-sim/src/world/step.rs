@@ -113,7 +113,8 @@ impl World {
             .heap
             .peek()
             .map_or(limit, |(_, k)| k.min(limit))
-            .min(self.next_load_time());
+            .min(self.next_load_time())
+            .min(self.islands.next_step.max(t0));
         // Every moving body's motion, once per step (a scratch buffer kept between steps).
         let (g, eps) = (self.gravity, self.collision_epsilon());
         let mut moving = std::mem::take(&mut self.moving);
@@ -173,6 +174,10 @@ impl World {
         if self.next_load_time() <= self.time {
             self.evaluate_due_loads()?;
             self.rekey_stale()?;
+        }
+        // Island steps due now (the switching contact model) set new held loads.
+        if self.islands.next_step <= self.time {
+            self.island_step()?;
         }
         // 4. Check the top pair if it is due.
         if let Some((pair, key)) = self.heap.peek() {
@@ -304,5 +309,8 @@ fn difference(a: &Counters, b: &Counters) -> Counters {
         touching_checks: a.touching_checks - b.touching_checks,
         min_distance: a.min_distance,
         max_penetration: a.max_penetration,
+        island_steps: a.island_steps - b.island_steps,
+        transients: a.transients - b.transients,
+        sleeps: a.sleeps - b.sleeps,
     }
 }

@@ -1,0 +1,160 @@
+//! The switching contact model (thesis §8.1): impacts stay impulses, sustained contact becomes
+//! a constraint.
+//!
+//! Mirtich's closing chapter names the weakness of pure impulse-based simulation — a body
+//! resting, sliding or rolling on another is a train of microcollisions — and its remedy: switch
+//! a contact to a constraint when it becomes static, and back to impulses when an abrupt change
+//! comes. [`ContactMode::Switching`] does that:
+//!
+//! - **Onset**: a pair that the event loop finds within ε_c and approaching slower than the
+//!   switching speed `v_s` ([`SustainedSettings::switch_speed_factor`] × √(2·g·ε_c), the
+//!   thesis's own microcollision threshold, eq. 3.18) gets no impulse: it is *held* — it leaves
+//!   the collision heap's schedule and joins the contact islands. Anything faster is a
+//!   collision of chapter 3, exactly as in [`ContactMode::Impulse`].
+//! - **Island steps**: every `h` ([`SustainedSettings::step`]) the held pairs' manifolds are
+//!   computed (`impulse_collide::manifold`), bodies joined by held pairs form islands, and each
+//!   island's contact impulses over the coming step are solved with the exact Coulomb disk
+//!   (`impulse_response::contact`). The impulses are not applied as velocity jumps: each body
+//!   **holds the contact force P/h and torque constant over the step**, so between island steps
+//!   every body is ballistic under gravity, its loads and its held contact load — the motion
+//!   model the event loop's time-of-impact bounds already cover. Velocities stay continuous;
+//!   a sliding body's motion under constant friction is exact, and a ball rolls without hops.
+//! - **Position stabilisation**: a held contact rests at the gap g_r = `rest_gap_fraction`·ε_c
+//!   inside the contact envelope [0, ε_c]; each step asks for the end-of-step normal speed
+//!   u_n ≥ β·(g_r − gap)/h (β = [`SustainedSettings::stabilisation`]), which pushes an overlap
+//!   back and lets a gap close, without the velocity ringing of a trapezoidal target. The
+//!   energy this can add is bounded: a contact pushed from the deepest overlap it can have
+//!   (g_r) gains at most ½·m_eff·(β·g_r/h)².
+//! - **Transitions in time**: when a contact that was slipping at the start of a step sticks
+//!   at its end, the step is shortened to the instant sliding friction stops the slip
+//!   (the fraction |p_t|/(μ·p_n) of the step), so slip → stick is located, not rounded to h.
+//! - **Transients**: a held contact whose normal speed at a step is an approach faster than
+//!   `v_s` (a body was struck, an impulse or a new load was applied) is first resolved by an
+//!   impulsive solve of its island (velocity jumps, e = 0 between held contacts: the island
+//!   reacts through its constraints), then stepped as usual. A struck body itself gets the
+//!   chapter-3 collision from the event loop.
+//! - **Lift-off**: a held pair whose manifold is gone (no point within ε_c) is released to the
+//!   event loop, which bounds its next approach as it bounds any pair.
+//! - **Sleeping**: an island whose bodies all move slower than the sleep speed for
+//!   [`SustainedSettings::sleep_time`] sleeps: velocities and held loads are zeroed and its
+//!   bodies are fixed until something touches them, the program changes them, or an awake
+//!   body's held pair joins them to an awake island. Waking is exact: a sleeping body is at
+//!   rest, so it resumes from the state it slept in.
+//!
+//! **Must not know** how collisions are resolved (chapter 3, `crate::contact`) or scene files.
+
+use serde::{Deserialize, Serialize};
+
+/// How contacts are modelled.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ContactMode {
+    /// Every contact is an impulse (thesis chapters 2–3): collisions, and microcollisions for
+    /// resting contact.
+    #[default]
+    Impulse,
+    /// Impacts are impulses, sustained contact is a constraint (thesis §8.1; module
+    /// documentation).
+    Switching,
+}
+
+/// Settings of the switching contact model (module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SustainedSettings {
+    /// Island step h (s). Default [`DEFAULT_STEP`].
+    pub step: f64,
+    /// The switching speed in units of the microcollision speed √(2·g·ε_c) (thesis eq.
+    /// 3.18). Default `1.0`.
+    pub switch_speed_factor: f64,
+    /// Where a held contact rests inside the contact envelope, as a fraction of ε_c. Default
+    /// `0.1`: a stack of n blocks stands n·0.1·ε_c taller than its blocks.
+    pub rest_gap_fraction: f64,
+    /// Fraction β of a gap error corrected per step. Default `0.01`: 0.2 made stacks of 16
+    /// sway (the correction feeds speed faster than the solver settles a tall island).
+    pub stabilisation: f64,
+    /// The sleep speed in units of the microcollision speed: an island sleeps when all its
+    /// bodies' points move slower (‖v‖ + ‖ω‖·r_max). Default `0.01`.
+    pub sleep_speed_factor: f64,
+    /// How long (s) an island must stay below the sleep speed to sleep. Default `0.5`.
+    pub sleep_time: f64,
+    /// Most projected Gauss–Seidel sweeps per island solve. Default `200`.
+    pub max_sweeps: usize,
+    /// Solver tolerance in units of the microcollision speed. Default `1e-4`.
+    pub solver_tolerance_factor: f64,
+    /// Sweeps without convergence after which the solver tries a direct solve on the active
+    /// set (`impulse_response::contact`: tall stacks). Default `20`.
+    pub direct_after: usize,
+}
+
+/// Default island step (s): 1 ms.
+pub const DEFAULT_STEP: f64 = 1e-3;
+
+/// A contact counts as slipping at the start of a step when its tangential speed exceeds this
+/// fraction of the microcollision speed (for locating slip → stick). Below it, a transition
+/// rounded to the step's end is off in time by less than this speed over the slip's
+/// deceleration: for a ball launched with slip u₀ the relative error of its time to rolling
+/// is below this speed over u₀ (1e-4 for u₀ = 0.44 m/s at ε_c = 1e-4 m, g = 9.81 m/s²);
+/// settling stacks, whose corners stick and slip by tiny amounts, are not cut into tiny
+/// steps. Default `1e-3`.
+pub const SLIP_FRACTION: f64 = 1e-3;
+
+/// A contact counts as sticking at the end of a step when its friction impulse is below this
+/// fraction of the cone's radius μ·p_n. Default `1.0 − 1e-9`.
+pub const STICK_FRACTION: f64 = 1.0 - 1e-9;
+
+/// Shortest step a transition may cut a step to, as a fraction of [`SustainedSettings::step`]
+/// (a transition right at a step's start is taken at the start). Default `1e-3`.
+pub const MIN_STEP_FRACTION: f64 = 1e-3;
+
+impl Default for SustainedSettings {
+    fn default() -> Self {
+        Self {
+            step: DEFAULT_STEP,
+            switch_speed_factor: 1.0,
+            rest_gap_fraction: 0.1,
+            stabilisation: 0.01,
+            sleep_speed_factor: 0.01,
+            sleep_time: 0.5,
+            max_sweeps: 200,
+            solver_tolerance_factor: 1e-4,
+            direct_after: 20,
+        }
+    }
+}
+
+impl SustainedSettings {
+    /// Checks every setting.
+    ///
+    /// # Errors
+    /// A sentence naming the setting that is out of range.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = |name: &str, x: f64| {
+            if x.is_finite() && x > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{name} {x} must be finite and > 0"))
+            }
+        };
+        positive("step", self.step)?;
+        positive("switch_speed_factor", self.switch_speed_factor)?;
+        positive("sleep_speed_factor", self.sleep_speed_factor)?;
+        positive("solver_tolerance_factor", self.solver_tolerance_factor)?;
+        if !(self.sleep_time.is_finite() && self.sleep_time >= 0.0) {
+            return Err(format!(
+                "sleep_time {} must be finite and ≥ 0",
+                self.sleep_time
+            ));
+        }
+        for (name, x) in [
+            ("rest_gap_fraction", self.rest_gap_fraction),
+            ("stabilisation", self.stabilisation),
+        ] {
+            if !(x > 0.0 && x < 1.0) {
+                return Err(format!("{name} {x} must lie in (0, 1)"));
+            }
+        }
+        if self.max_sweeps == 0 {
+            return Err("max_sweeps must be at least 1".into());
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,562 @@
+//! Contact islands of the switching model ([`crate::sustained`]): holding and releasing pairs,
+//! the island step (manifolds, solve, held contact loads, slip → stick in time), sleeping and
+//! waking.
+
+use glam::DVec3;
+use impulse_collide::manifold::{self, MAX_POINTS, Manifold, ManifoldCache};
+use impulse_response::{Contact, IslandBody, SolverSettings, solve_contacts};
+use rustc_hash::FxHashMap;
+
+use super::World;
+use crate::contact::response_body;
+use crate::error::SimError;
+use crate::sustained::{
+    ContactMode, MIN_STEP_FRACTION, SLIP_FRACTION, STICK_FRACTION, SustainedSettings,
+};
+
+/// Most solves of one island step that locate a slip → stick transition (each cuts the step
+/// to the fraction the last solve found). Default `4`.
+const MAX_LOCATE_SOLVES: usize = 4;
+
+/// A located step is final when its patches' friction fills this fraction of their cones.
+/// Default `0.999`.
+const LOCATE_DONE: f64 = 0.999;
+
+/// A pair the islands hold: its manifolds of the last step and the impulse each point carried
+/// (the warm start of the next step).
+#[derive(Clone, Debug, Default)]
+pub(super) struct HeldPair {
+    manifolds: Vec<Manifold>,
+    impulses: Vec<[DVec3; MAX_POINTS]>,
+    cache: ManifoldCache,
+}
+
+/// The islands' state in a world.
+#[derive(Clone, Debug)]
+pub(super) struct Islands {
+    pub(super) mode: ContactMode,
+    pub(super) settings: SustainedSettings,
+    /// Held pairs (slot indices, as in the heap).
+    pub(super) held: FxHashMap<(u32, u32), HeldPair>,
+    /// When the next island step is due (∞ with no awake island).
+    pub(super) next_step: f64,
+    /// Length of the last island step (s), to scale warm-start impulses.
+    last_step: f64,
+    /// Since when each awake island body has moved slower than the sleep speed.
+    still_since: FxHashMap<u32, f64>,
+}
+
+impl Islands {
+    pub(super) fn new(mode: ContactMode, settings: SustainedSettings) -> Self {
+        Self {
+            mode,
+            settings,
+            held: FxHashMap::default(),
+            next_step: f64::INFINITY,
+            last_step: settings.step,
+            still_since: FxHashMap::default(),
+        }
+    }
+}
+
+/// One island: its dynamic bodies and its held pairs (sorted).
+struct Island {
+    bodies: Vec<u32>,
+    pairs: Vec<(u32, u32)>,
+}
+
+impl World {
+    /// Whether the switching contact model is on.
+    pub(super) fn switching(&self) -> bool {
+        self.islands.mode == ContactMode::Switching
+    }
+
+    /// The microcollision speed √(2·g·ε_c) (thesis eq. 3.18).
+    fn micro_speed(&self) -> f64 {
+        (2.0 * self.gravity.length() * self.collision_epsilon()).sqrt()
+    }
+
+    /// Contacts approaching slower than this are held (module documentation of
+    /// [`crate::sustained`]).
+    pub(super) fn switch_speed(&self) -> f64 {
+        self.islands.settings.switch_speed_factor * self.micro_speed()
+    }
+
+    pub(super) fn is_held(&self, pair: (u32, u32)) -> bool {
+        self.islands.held.contains_key(&pair)
+    }
+
+    /// Whether body `i` is in a held pair.
+    pub(super) fn is_held_body(&self, i: u32) -> bool {
+        self.islands.held.keys().any(|p| p.0 == i || p.1 == i)
+    }
+
+    /// Holds a pair: the islands take it over from the event loop (its heap key is set to ∞
+    /// by the caller) and an island step is due now.
+    pub(super) fn hold(&mut self, pair: (u32, u32)) {
+        self.islands.held.entry(pair).or_default();
+        self.islands.next_step = self.islands.next_step.min(self.time);
+    }
+
+    /// Releases a held pair to the event loop: both bodies' heap pairs get new bounds, and a
+    /// body left in no held pair loses its held contact load.
+    fn release(&mut self, pair: (u32, u32)) {
+        self.islands.held.remove(&pair);
+        for i in [pair.0, pair.1] {
+            if !self.islands.held.keys().any(|p| p.0 == i || p.1 == i) {
+                let b = self.b_mut(i);
+                b.held_force = DVec3::ZERO;
+                b.held_torque = DVec3::ZERO;
+                b.asleep = false;
+                self.islands.still_since.remove(&i);
+            }
+            if !self.stale.contains(&i) {
+                self.stale.push(i);
+            }
+        }
+    }
+
+    /// Forgets every held pair of body `i` (it was moved or removed).
+    pub(super) fn release_all_of(&mut self, i: u32) {
+        let mut mine: Vec<(u32, u32)> = self
+            .islands
+            .held
+            .keys()
+            .copied()
+            .filter(|p| p.0 == i || p.1 == i)
+            .collect();
+        mine.sort_unstable();
+        self.wake(i);
+        for p in mine {
+            self.release(p);
+        }
+    }
+
+    /// Wakes the island of body `i` if it sleeps (every body joined to it by held pairs),
+    /// schedules an island step now, and returns the bodies woken (their heap pairs need new
+    /// bounds: they were fixed).
+    pub(super) fn wake(&mut self, i: u32) -> Vec<u32> {
+        if !self.slots[i as usize]
+            .body
+            .as_ref()
+            .is_some_and(|b| b.asleep)
+        {
+            return Vec::new();
+        }
+        let mut woken = vec![i];
+        let mut k = 0;
+        while k < woken.len() {
+            let j = woken[k];
+            k += 1;
+            let mut next: Vec<u32> = self
+                .islands
+                .held
+                .keys()
+                .filter_map(|&(a, b)| {
+                    if a == j {
+                        Some(b)
+                    } else if b == j {
+                        Some(a)
+                    } else {
+                        None
+                    }
+                })
+                .filter(|&o| self.b(o).is_dynamic() && !woken.contains(&o))
+                .collect();
+            next.sort_unstable();
+            woken.extend(next);
+        }
+        for &j in &woken {
+            self.b_mut(j).asleep = false;
+            self.islands.still_since.remove(&j);
+            if !self.stale.contains(&j) {
+                self.stale.push(j);
+            }
+        }
+        self.islands.next_step = self.islands.next_step.min(self.time);
+        woken
+    }
+
+    /// The islands: dynamic bodies joined by held pairs (union–find), in a deterministic
+    /// order.
+    fn islands(&self) -> Vec<Island> {
+        let n = self.slots.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(parent: &mut [u32], mut x: u32) -> u32 {
+            while parent[x as usize] != x {
+                parent[x as usize] = parent[parent[x as usize] as usize];
+                x = parent[x as usize];
+            }
+            x
+        }
+        let mut pairs: Vec<(u32, u32)> = self.islands.held.keys().copied().collect();
+        pairs.sort_unstable();
+        for &(a, b) in &pairs {
+            if self.b(a).is_dynamic() && self.b(b).is_dynamic() {
+                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                }
+            }
+        }
+        let mut by_root: std::collections::BTreeMap<u32, Island> = Default::default();
+        for &(a, b) in &pairs {
+            let d = if self.b(a).is_dynamic() { a } else { b };
+            let root = find(&mut parent, d);
+            let island = by_root.entry(root).or_insert_with(|| Island {
+                bodies: Vec::new(),
+                pairs: Vec::new(),
+            });
+            island.pairs.push((a, b));
+            for x in [a, b] {
+                if self.b(x).is_dynamic() && !island.bodies.contains(&x) {
+                    island.bodies.push(x);
+                }
+            }
+        }
+        by_root
+            .into_values()
+            .map(|mut i| {
+                i.bodies.sort_unstable();
+                i
+            })
+            .collect()
+    }
+
+    /// One island step (module documentation of [`crate::sustained`]).
+    pub(super) fn island_step(&mut self) -> Result<(), SimError> {
+        let t = self.time;
+        let settings = self.islands.settings;
+        let eps = self.collision_epsilon();
+        let warm_scale = settings.step / self.islands.last_step;
+        // 1. Manifolds of the pairs of awake bodies; lift-off releases a pair.
+        let mut pairs: Vec<(u32, u32)> = self.islands.held.keys().copied().collect();
+        pairs.sort_unstable();
+        let mut released = Vec::new();
+        for &p in &pairs {
+            let live = "internal ids name live bodies";
+            let ba = self.slots[p.0 as usize].body.as_ref().expect(live);
+            let bb = self.slots[p.1 as usize].body.as_ref().expect(live);
+            let sleeping = |b: &crate::body::Body| b.asleep || !b.is_dynamic();
+            if sleeping(ba) && sleeping(bb) {
+                continue;
+            }
+            let held = self.islands.held.get_mut(&p).expect("listed above");
+            let found = manifold::shape_manifolds(
+                &ba.shape,
+                &ba.pose,
+                &bb.shape,
+                &bb.pose,
+                eps,
+                &mut held.cache,
+            );
+            let found = match found {
+                Ok(m) => m,
+                Err(e) => {
+                    let msg = format!("contact manifold of {} / {}: {e}", ba.name, bb.name);
+                    return Err(self.runtime(msg));
+                }
+            };
+            let live: Vec<Manifold> = found.into_iter().filter(|m| m.min_gap() <= eps).collect();
+            if live.is_empty() {
+                released.push(p);
+                continue;
+            }
+            let mut impulses = vec![[DVec3::ZERO; MAX_POINTS]; live.len()];
+            for (k, m) in live.iter().enumerate() {
+                let old = held.manifolds.iter().position(|o| o.pieces == m.pieces);
+                if let Some(j) = old {
+                    let map = manifold::match_points(&held.manifolds[j], m, eps);
+                    for (q, o) in map.iter().enumerate() {
+                        if let Some(o) = o {
+                            impulses[k][q] = held.impulses[j][*o] * warm_scale;
+                        }
+                    }
+                }
+            }
+            held.manifolds = live;
+            held.impulses = impulses;
+        }
+        for p in released {
+            self.release(p);
+        }
+        // 2. Each awake island: wake the whole of a partly sleeping one, solve, hold.
+        let mut next = f64::INFINITY;
+        let mut touched: Vec<u32> = Vec::new();
+        for island in self.islands() {
+            if island.bodies.iter().all(|&i| self.b(i).asleep) {
+                continue;
+            }
+            for &i in &island.bodies {
+                if self.b(i).asleep {
+                    self.b_mut(i).asleep = false;
+                }
+            }
+            let h = self.step_island(&island)?;
+            next = next.min(h);
+            touched.extend(&island.bodies);
+            self.counters.island_steps += 1;
+            self.sleep_if_still(&island);
+        }
+        if next.is_finite() {
+            self.islands.last_step = next;
+            self.islands.next_step = t + next;
+        } else {
+            self.islands.next_step = f64::INFINITY;
+        }
+        touched.sort_unstable();
+        touched.dedup();
+        let mut stale = std::mem::take(&mut self.stale);
+        stale.extend(touched);
+        stale.sort_unstable();
+        stale.dedup();
+        self.rekey(&stale, None)
+    }
+
+    /// Solves one island's contacts over the coming step, sets its bodies' held contact loads,
+    /// and returns the step's length (shortened to a slip → stick transition).
+    fn step_island(&mut self, island: &Island) -> Result<f64, SimError> {
+        let settings = self.islands.settings;
+        let eps = self.collision_epsilon();
+        let v_micro = self.micro_speed();
+        let v_s = self.switch_speed();
+        let rest_gap = settings.rest_gap_fraction * eps;
+        let solver = SolverSettings {
+            max_iterations: settings.max_sweeps,
+            tolerance: (settings.solver_tolerance_factor * v_micro).max(f64::MIN_POSITIVE),
+            direct_after: Some(settings.direct_after),
+        };
+        // Bodies: the island's dynamic bodies, then the fixed and scripted ones it touches.
+        let mut index: FxHashMap<u32, usize> = FxHashMap::default();
+        let mut ids: Vec<u32> = Vec::new();
+        let mut bodies: Vec<IslandBody> = Vec::new();
+        let mut add = |w: &World, i: u32, ids: &mut Vec<u32>, bodies: &mut Vec<IslandBody>| {
+            *index.entry(i).or_insert_with(|| {
+                let b = w.b(i);
+                ids.push(i);
+                bodies.push(IslandBody {
+                    body: response_body(b),
+                    com: b.pose.translation,
+                    velocity: b.velocity,
+                    omega: b.omega,
+                });
+                bodies.len() - 1
+            })
+        };
+        for &i in &island.bodies {
+            add(self, i, &mut ids, &mut bodies);
+        }
+        let mut contacts: Vec<Contact> = Vec::new();
+        let mut gaps: Vec<f64> = Vec::new();
+        let mut origin: Vec<((u32, u32), usize, usize)> = Vec::new();
+        for &p in &island.pairs {
+            let (ka, kb) = (
+                add(self, p.0, &mut ids, &mut bodies),
+                add(self, p.1, &mut ids, &mut bodies),
+            );
+            let friction = self.material(p.0, p.1).friction;
+            let (dyn_a, dyn_b) = (self.b(p.0).is_dynamic(), self.b(p.1).is_dynamic());
+            let held = &self.islands.held[&p];
+            for (m, (man, imp)) in held.manifolds.iter().zip(&held.impulses).enumerate() {
+                for (q, point) in man.points().iter().enumerate() {
+                    // Against a fixed or scripted body the contact acts at the moving body's
+                    // surface (its lever arm exact, whatever the gap); between two moving
+                    // bodies, midway.
+                    let at = match (dyn_a, dyn_b) {
+                        (true, false) => point.point_a,
+                        (false, true) => point.point_b,
+                        _ => point.midpoint(),
+                    };
+                    // The manifold's normal points from a to b: body 1 is b, body 2 is a.
+                    contacts.push(Contact {
+                        body1: kb,
+                        body2: Some(ka),
+                        point: at,
+                        normal: man.normal,
+                        friction,
+                        target_normal_velocity: 0.0,
+                        impulse: imp[q],
+                    });
+                    gaps.push(point.gap);
+                    origin.push((p, m, q));
+                }
+            }
+        }
+        // Transients: a held contact approaching faster than v_s gets an impulsive solve of its
+        // island first (e = 0 between held contacts).
+        let approach = contacts
+            .iter()
+            .map(|c| normal_speed(&bodies, c))
+            .fold(f64::INFINITY, f64::min);
+        if approach < -v_s {
+            let mut jolt = contacts.clone();
+            for (c, &gap) in jolt.iter_mut().zip(&gaps) {
+                c.impulse = DVec3::ZERO;
+                c.target_normal_velocity =
+                    (settings.stabilisation * (rest_gap - gap) / settings.step).max(0.0);
+            }
+            self.solve(&mut bodies, &mut jolt, &solver)?;
+            self.counters.transients += 1;
+        }
+        let after_jolt = bodies.clone();
+        // The step: predict, solve, and locate a slip → stick transition.
+        let mut h = settings.step;
+        let mut solved;
+        let mut tries = 0;
+        loop {
+            tries += 1;
+            bodies.clone_from(&after_jolt);
+            self.predict(&ids, &mut bodies, h);
+            let predicted = bodies.clone();
+            // The stabilisation's rate is that of the nominal step: a step cut short by a
+            // transition must not push harder.
+            for (c, &gap) in contacts.iter_mut().zip(&gaps) {
+                c.target_normal_velocity =
+                    settings.stabilisation * (rest_gap - gap) / settings.step;
+            }
+            let mut trial = contacts.clone();
+            self.solve(&mut bodies, &mut trial, &solver)?;
+            solved = (predicted, trial);
+            if tries > MAX_LOCATE_SOLVES {
+                break;
+            }
+            // Per manifold (its points share the normal and frame): the fraction of the step
+            // that sliding friction on the whole patch takes to deliver the friction impulse
+            // that stopped the slip, |Σ p_t| / (μ Σ p_n), for a patch slipping at the start of
+            // the step and sticking at its end.
+            let slip_tol = SLIP_FRACTION * v_micro;
+            let mut s = 1.0_f64;
+            let mut k = 0;
+            while k < contacts.len() {
+                let patch = (origin[k].0, origin[k].1);
+                let mut end = k;
+                while end < contacts.len() && (origin[end].0, origin[end].1) == patch {
+                    end += 1;
+                }
+                let (c0, c) = (&contacts[k..end], &solved.1[k..end]);
+                let slipping = c0
+                    .iter()
+                    .any(|c| tangential_speed(&after_jolt, c) > slip_tol);
+                let sticks = c.iter().all(|c| {
+                    c.impulse.truncate().length() < STICK_FRACTION * c.friction * c.impulse.z
+                });
+                let total: DVec3 = c.iter().map(|c| c.impulse).sum();
+                let cone = c[0].friction * total.z;
+                if slipping && sticks && cone > 0.0 {
+                    s = s.min(total.truncate().length() / cone);
+                }
+                k = end;
+            }
+            // Cut again while a patch still sticks inside its cone (several points share
+            // a patch's load unevenly, so one cut may stop short).
+            if s >= LOCATE_DONE {
+                break;
+            }
+            h = (s * h).max(MIN_STEP_FRACTION * settings.step);
+            for (c, sol) in contacts.iter_mut().zip(&solved.1) {
+                c.impulse = sol.impulse * s;
+            }
+        }
+        let (predicted, solution) = solved;
+        // Held loads: the impulse of the step spread over it.
+        for (k, &i) in ids.iter().enumerate() {
+            let b = self.b(i);
+            if !b.is_dynamic() {
+                continue;
+            }
+            let force = b.mass.map_or(DVec3::ZERO, |m| {
+                m.mass * (bodies[k].velocity - predicted[k].velocity) / h
+            });
+            let torque = b.inertia_world() * (bodies[k].omega - predicted[k].omega) / h;
+            let (v, w) = (after_jolt[k].velocity, after_jolt[k].omega);
+            let b = self.b_mut(i);
+            b.velocity = v;
+            b.omega = w;
+            b.held_force = force;
+            b.held_torque = torque;
+        }
+        // Keep each point's impulse for the next step's warm start.
+        for (c, &(p, m, q)) in solution.iter().zip(&origin) {
+            if let Some(held) = self.islands.held.get_mut(&p) {
+                held.impulses[m][q] = c.impulse;
+            }
+        }
+        Ok(h)
+    }
+
+    /// Velocities after a step of length `h` without contact: gravity, loads (the gyroscopic
+    /// term is left to the rotation integrator).
+    fn predict(&self, ids: &[u32], bodies: &mut [IslandBody], h: f64) {
+        for (k, &i) in ids.iter().enumerate() {
+            let b = self.b(i);
+            let Some(m) = b.mass.filter(|_| b.is_dynamic()) else {
+                continue;
+            };
+            bodies[k].velocity += (self.gravity + b.force / m.mass) * h;
+            bodies[k].omega += b.inverse_inertia_world() * b.torque * h;
+        }
+    }
+
+    fn solve(
+        &self,
+        bodies: &mut [IslandBody],
+        contacts: &mut [Contact],
+        solver: &SolverSettings,
+    ) -> Result<(), SimError> {
+        solve_contacts(bodies, contacts, solver)
+            .map(|_| ())
+            .map_err(|e| self.runtime(format!("island contact solve: {e}")))
+    }
+
+    /// Puts an island to sleep when all its bodies have moved slower than the sleep speed for
+    /// the sleep time (bodies under load functions never sleep).
+    fn sleep_if_still(&mut self, island: &Island) {
+        let settings = self.islands.settings;
+        let v_sleep = settings.sleep_speed_factor * self.micro_speed();
+        let t = self.time;
+        let mut all = true;
+        for &i in &island.bodies {
+            let b = self.b(i);
+            let speed = b.velocity.length() + b.omega.length() * b.r_max;
+            let loaded = self.loads.iter().any(|l| l.body == i);
+            if speed < v_sleep && !loaded {
+                let since = *self.islands.still_since.entry(i).or_insert(t);
+                all &= t - since >= settings.sleep_time;
+            } else {
+                self.islands.still_since.remove(&i);
+                all = false;
+            }
+        }
+        if all {
+            for &i in &island.bodies {
+                let b = self.b_mut(i);
+                b.asleep = true;
+                b.velocity = DVec3::ZERO;
+                b.omega = DVec3::ZERO;
+                b.held_force = DVec3::ZERO;
+                b.held_torque = DVec3::ZERO;
+            }
+            self.counters.sleeps += 1;
+        }
+    }
+}
+
+/// Relative normal speed of a contact (positive apart).
+fn normal_speed(bodies: &[IslandBody], c: &Contact) -> f64 {
+    relative_velocity(bodies, c).dot(c.normal.normalize())
+}
+
+/// Relative tangential speed of a contact.
+fn tangential_speed(bodies: &[IslandBody], c: &Contact) -> f64 {
+    let n = c.normal.normalize();
+    let u = relative_velocity(bodies, c);
+    (u - n * u.dot(n)).length()
+}
+
+/// Velocity of body 1's point relative to body 2's at the contact point.
+fn relative_velocity(bodies: &[IslandBody], c: &Contact) -> DVec3 {
+    let at = |b: &IslandBody| b.velocity + b.omega.cross(c.point - b.com);
+    let v1 = at(&bodies[c.body1]);
+    let v2 = c.body2.map_or(DVec3::ZERO, |k| at(&bodies[k]));
+    v1 - v2
+}
