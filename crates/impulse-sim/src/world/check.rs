@@ -15,6 +15,11 @@ use crate::error::SimError;
 /// ([`impulse_collide::depth::separating_axis`]) gives it instead. Default `1e-9`.
 pub const NORMAL_FROM_POINTS_REL: f64 = 1e-9;
 
+/// A pair is held only while rotation moves its surfaces slower than this fraction of the
+/// speed at which a held pair is released ([`World::rotation_limit`]): the gap between the two
+/// keeps a rocking body from switching at every step. Default `0.5`.
+pub const HOLD_ROTATION_FRACTION: f64 = 0.5;
+
 /// The result of checking a pair: the closest piece pair, and the distance and normal of
 /// every piece pair examined (for the time-of-impact bound, eq. 2.1).
 pub(super) struct Scan {
@@ -239,6 +244,21 @@ impl World {
                     self.hold(pair);
                     held = true;
                 } else if let Some(x) = x {
+                    // A slow contact that is not held because a body turns too fast makes
+                    // that body wholly impulse-driven: a body half held would be pressed by a
+                    // held load its microcollisions do not know of.
+                    if self.switching() && self.is_slow(pair, x, n) {
+                        let limit = HOLD_ROTATION_FRACTION * self.rotation_limit();
+                        for i in [pair.0, pair.1] {
+                            let b = self.b(i);
+                            let turning = super::island::rotation_speed(b, b) >= limit;
+                            if turning && self.is_held_body(i) {
+                                self.release_all_of(i);
+                            }
+                        }
+                        let stale = std::mem::take(&mut self.stale);
+                        self.rekey(&stale, Some(pair))?;
+                    }
                     hit = self.resolve(pair, x, n, scan.distance);
                 }
             }
@@ -247,6 +267,11 @@ impl World {
         }
         if hit {
             self.rekey_others(pair)?;
+            // A body of an island was struck: its island reacts now, through its
+            // constraints, before its held contacts can be driven through.
+            if self.is_held_body(pair.0) || self.is_held_body(pair.1) {
+                self.islands.next_step = self.islands.next_step.min(self.time);
+            }
         }
         let key = if held {
             f64::INFINITY
@@ -313,9 +338,9 @@ impl World {
     }
 
     /// Whether a contact found at `x` along `n` becomes a held (sustained) contact instead of
-    /// a collision: in the switching model, when a body of the pair is dynamic and the
-    /// contact neither approaches nor separates faster than the switching speed
-    /// ([`crate::sustained`]).
+    /// a collision: in the switching model, when a body of the pair is dynamic, the contact
+    /// neither approaches nor separates faster than the switching speed, and the pair does
+    /// not turn fast ([`HOLD_ROTATION_FRACTION`]; [`crate::sustained`]).
     fn holds(&self, (a, b): (u32, u32), x: DVec3, n: DVec3) -> bool {
         if !self.switching() {
             return false;
@@ -324,6 +349,15 @@ impl World {
         if !(ba.is_dynamic() || bb.is_dynamic()) {
             return false;
         }
+        self.is_slow((a, b), x, n)
+            && super::island::rotation_speed(ba, bb)
+                < HOLD_ROTATION_FRACTION * self.rotation_limit()
+    }
+
+    /// Whether a contact at `x` along `n` neither approaches nor separates faster than the
+    /// switching speed.
+    fn is_slow(&self, (a, b): (u32, u32), x: DVec3, n: DVec3) -> bool {
+        let (ba, bb) = (self.b(a), self.b(b));
         let approach = -(ba.point_velocity(x) - bb.point_velocity(x)).dot(n);
         approach.abs() < self.switch_speed()
     }
