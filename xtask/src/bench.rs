@@ -10,7 +10,8 @@
 //! 0), and whether all the scene's metrics pass. It writes `bench.csv` and one `<scene>.svg`
 //! (error against slowdown, log–log) per scene into the output directory (default
 //! `target/bench`). Then it runs the stack study ([`crate::stacks`], also alone with
-//! `--case stacks`) and writes `stacks.csv`.
+//! `--case stacks`) and writes `stacks.csv`. With `--peers` it runs [`crate::peers`] instead
+//! (re-running itself with the `peers` feature, which builds the peer engine).
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -75,6 +76,8 @@ pub struct Options {
     pub case: Option<String>,
     /// Set when already running in the release build.
     pub in_release: bool,
+    /// Run the peer comparison ([`crate::peers`]) instead: built with the `peers` feature.
+    pub peers: bool,
 }
 
 /// One row of the table.
@@ -96,16 +99,16 @@ pub fn run_bench(options: &Options) -> Result<()> {
     if !options.in_release {
         let mut cmd = Command::new(crate::cargo());
         cmd.current_dir(crate::workspace_root())
-            .args([
-                "run",
-                "--release",
-                "--quiet",
-                "--package",
-                "xtask",
-                "--",
-                "bench",
-            ])
-            .arg("--in-release");
+            .args(["run", "--release", "--quiet", "--package", "xtask"])
+            .args(if options.peers {
+                &["--features", "peers"][..]
+            } else {
+                &[]
+            })
+            .args(["--", "bench", "--in-release"]);
+        if options.peers {
+            cmd.arg("--peers");
+        }
         if let Some(out) = &options.out {
             cmd.arg("--out").arg(out);
         }
@@ -126,6 +129,9 @@ pub fn run_bench(options: &Options) -> Result<()> {
         .clone()
         .unwrap_or_else(|| crate::workspace_root().join("target").join("bench"));
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    if options.peers {
+        return crate::peers::run(&out);
+    }
     if options.case.as_deref() == Some(crate::forks::CASE) {
         return crate::forks::run(&out);
     }

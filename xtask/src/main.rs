@@ -21,6 +21,9 @@ mod cases;
 mod ci;
 mod forks;
 mod layering;
+// Without the `peers` feature the runner is built (so CI checks it) but has no engine to call.
+#[cfg_attr(not(feature = "peers"), allow(dead_code))]
+mod peers;
 mod stacks;
 mod validate;
 
@@ -40,12 +43,16 @@ commands:
   validate [--update] [--case NAME]   run the validation cases (all, or only NAME), check each
                                       metric against its reference, compare with the snapshots
                                       in fixtures/snapshots/; --update writes the snapshots
-  bench [--out DIR] [--case NAME]     speed against error: every scene at three accuracy settings
+  bench [--out DIR] [--case NAME] [--peers]
+                                      speed against error: every scene at three accuracy settings
                                       in a release build; prints slowdown next to thesis Table 7.1
                                       and the error; writes bench.csv and one SVG per scene to DIR
                                       (default target/bench); then the stack study of 1–8 blocks
                                       (stacks.csv; alone with --case stacks); --case forks
-                                      runs the FORK⁻¹S study alone (Tables 1-2, Fig. 7)
+                                      runs the FORK⁻¹S study alone (Tables 1-2, Fig. 7);
+                                      --peers runs stacks, dominos, ramp, sliding→rolling and
+                                      pool break in impulse and rapier3d-f64 side by side
+                                      (builds xtask with --features peers; peers.csv, peers.svg)
   layering                            check crate dependencies against the layer table of
                                       docs/architecture.md
   help                                print this message
@@ -131,7 +138,7 @@ fn parse_validate(args: &[String]) -> Result<validate::Options> {
     Ok(options)
 }
 
-/// Parses `bench [--out DIR] [--case NAME] [--in-release]`.
+/// Parses `bench [--out DIR] [--case NAME] [--in-release] [--peers]`.
 fn parse_bench(args: &[String]) -> Result<bench::Options> {
     let mut options = bench::Options::default();
     let mut args = args.iter();
@@ -142,6 +149,7 @@ fn parse_bench(args: &[String]) -> Result<bench::Options> {
                 options.case = Some(args.next().ok_or("`--case` needs a case name")?.clone())
             }
             "--in-release" => options.in_release = true,
+            "--peers" => options.peers = true,
             _ => return Err(format!("unexpected argument `{arg}` to `bench`")),
         }
     }
@@ -195,6 +203,19 @@ mod tests {
             parse(&["validate", "--case=V2"]),
             Ok(Command::Validate(expected))
         );
+    }
+
+    /// `bench --peers` asks for the peer comparison; nothing else does.
+    #[test]
+    fn bench_peers_parses() {
+        let Ok(Command::Bench(options)) = parse(&["bench", "--peers"]) else {
+            panic!("bench --peers did not parse");
+        };
+        assert!(options.peers && !options.in_release);
+        let Ok(Command::Bench(options)) = parse(&["bench"]) else {
+            panic!("bench did not parse");
+        };
+        assert!(!options.peers);
     }
 
     #[test]
