@@ -23,7 +23,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use impulse_sim::{Scene, SceneDesc, World};
+use impulse_sim::{ContactMode, Scene, SceneDesc, World};
 
 use crate::Result;
 use measure::{Frame, Measure, State, Trajectory};
@@ -69,10 +69,13 @@ pub struct PeerScene {
 /// A mode `impulse` runs in: its name in the table and what it changes in the scene.
 pub type Mode = (&'static str, fn(&mut SceneDesc));
 
-/// The modes `impulse` runs in. Today only the thesis's pure impulse model; a contact model
-/// chosen in the scene is one more line here.
+/// The modes `impulse` runs in: the thesis's pure impulse model and the switching model
+/// (impulses for impacts, constraints for sustained contact; `impulse_sim::sustained`).
 pub fn our_modes() -> Vec<Mode> {
-    vec![("impulse", |_| {})]
+    vec![
+        ("impulse", |d| d.contact_model = ContactMode::Impulse),
+        ("switching", |d| d.contact_model = ContactMode::Switching),
+    ]
 }
 
 /// The scenes, in table order.
