@@ -97,9 +97,10 @@ pub struct SolverSettings {
     /// Convergence tolerance, a speed (length/time): the solve stops when a whole sweep
     /// changed no contact velocity by more than this (default 1e-9 m/s).
     pub tolerance: f64,
-    /// After this many sweeps without convergence, a direct solve on the active set the
-    /// sweeps found (`direct.rs`: tall stacks), then sweeps again; tried again every as many
-    /// sweeps until one is taken. `None` (the default): sweeps only.
+    /// After this many sweeps without convergence, one direct solve on the active set the
+    /// sweeps found (`direct.rs`: tall stacks), then sweeps again (once per solve: a failed
+    /// attempt costs up to 2·[`MAX_ROUNDS`] factorisations). `None` (the default): sweeps
+    /// only.
     pub direct_after: Option<usize>,
 }
 
@@ -183,10 +184,7 @@ pub fn solve_contacts(
         report.iterations += 1;
         report.residual = residual;
         report.converged = residual <= settings.tolerance;
-        let due = settings
-            .direct_after
-            .is_some_and(|k| k > 0 && report.iterations % k == 0);
-        if !report.converged && !report.direct && due {
+        if !report.converged && settings.direct_after == Some(report.iterations) {
             report.direct = direct::solve_active_set(bodies, contacts, &rows, settings.tolerance);
         }
     }
