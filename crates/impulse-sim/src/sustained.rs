@@ -23,8 +23,8 @@
 //!   inside the contact envelope [0, ε_c]; each step asks for the end-of-step normal speed
 //!   u_n ≥ β·(g_r − gap)/h (β = [`SustainedSettings::stabilisation`]), which pushes an overlap
 //!   back and lets a gap close, without the velocity ringing of a trapezoidal target. The
-//!   energy this can add is bounded: a contact pushed from the deepest overlap it can have
-//!   (g_r) gains at most ½·m_eff·(β·g_r/h)².
+//!   energy this can add is bounded: it lifts a body by at most g_r per contact beneath it
+//!   (Σ m·|g|·N·g_r for N bodies) and pushes at most at β·g_r/h (½·m·(β·g_r/h)² each).
 //! - **Transitions in time**: when a contact that was slipping at the start of a step sticks
 //!   at its end, the step is shortened to the instant sliding friction stops the slip
 //!   (the fraction |p_t|/(μ·p_n) of the step), so slip → stick is located, not rounded to h.

@@ -433,3 +433,57 @@ fn impulse_mode_takes_no_island_steps() {
     assert!(report.counters.microcollisions > 0);
     let _: Option<BodyHandle> = world.handle("block0");
 }
+
+/// Total energy (kinetic + potential) of every body.
+fn energy(world: &World) -> f64 {
+    world.kinetic_energy() + world.potential_energy()
+}
+
+/// In the switching model with e ≤ 1 and no actuation, total energy never rises above its
+/// start by more than the stabilisation's bound. The stabilisation draws each held contact to
+/// the rest gap g_r, so it can lift a body by at most g_r per contact beneath it (at most N
+/// for N dynamic bodies: Σ m·|g|·N·g_r of potential energy), and it pushes at most at
+/// β·g_r/h (½·m·(β·g_r/h)² of kinetic energy per body). Measured every millisecond over 2 s
+/// on a 5 %-offset stack of 8 placed touching and on a ball launched to roll.
+#[test]
+fn energy_never_rises_beyond_the_stabilisation_bound() {
+    let s = SustainedSettings::default();
+    let eps = 1e-4;
+    let (g, rest) = (9.81, s.rest_gap_fraction * eps);
+    let push = s.stabilisation * rest / s.step;
+    for desc in [
+        stack(8, 0.05, 8),
+        switching(eps)
+            .with_default_contact(ContactDesc::new(0.3, 0.0))
+            .with_body(
+                BodyDesc::fixed("floor", ShapeDesc::cuboid([5.0, 5.0, 0.5])).at([0.0, 0.0, -0.5]),
+            )
+            .with_body(
+                BodyDesc::new("ball", ShapeDesc::sphere(0.05))
+                    .at([0.0, 0.0, 0.05])
+                    .with_velocity([1.0, 0.0, 0.0])
+                    .with_density(1000.0),
+            ),
+    ] {
+        let mut world = world_of(desc);
+        let masses: Vec<f64> = world
+            .bodies()
+            .filter_map(|(_, b)| b.mass.map(|m| m.mass))
+            .collect();
+        let n = masses.len() as f64;
+        let bound: f64 = masses
+            .iter()
+            .map(|m| m * g * n * rest + 0.5 * m * push * push)
+            .sum();
+        let start = energy(&world);
+        let mut worst: f64 = 0.0;
+        for k in 1..=2000 {
+            world.step_until(k as f64 * 1e-3).expect("runs");
+            worst = worst.max(energy(&world) - start);
+        }
+        assert!(
+            worst <= bound,
+            "energy rose by {worst:e} J above its start (bound {bound:e} J)"
+        );
+    }
+}
