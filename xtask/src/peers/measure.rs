@@ -7,7 +7,10 @@
 
 use glam::{DMat3, DQuat, DVec3};
 use impulse_sim::SceneDesc;
-use impulse_sim::scene::{BodyDesc, ContactDesc, MassDesc, RotationDesc, ShapeDesc};
+
+pub(crate) use crate::cases::scenes::rotation as rotation_of;
+use crate::cases::scenes::{half_extents, longest_axis, sphere_radius};
+use impulse_sim::scene::{BodyDesc, ContactDesc, MassDesc, ShapeDesc};
 
 /// A domino has toppled when its long axis leans more than this from the vertical (degrees;
 /// the same criterion as validation case V16).
@@ -125,37 +128,12 @@ pub fn contact_of(scene: &SceneDesc, a: &str, b: &str) -> ContactDesc {
         })
 }
 
-/// The rotation a scene gives a body.
-pub fn rotation_of(r: &RotationDesc) -> DQuat {
-    match *r {
-        RotationDesc::Identity => DQuat::IDENTITY,
-        RotationDesc::AxisAngle { axis, degrees } => {
-            DQuat::from_axis_angle(DVec3::from_array(axis).normalize(), degrees.to_radians())
-        }
-        RotationDesc::Quaternion(x, y, z, w) => DQuat::from_xyzw(x, y, z, w).normalize(),
-    }
-}
-
 fn body<'a>(scene: &'a SceneDesc, name: &str) -> Result<&'a BodyDesc, String> {
     scene
         .bodies
         .iter()
         .find(|b| b.name == name)
         .ok_or_else(|| format!("scene has no body \"{name}\""))
-}
-
-fn half_extents(b: &BodyDesc) -> Result<DVec3, String> {
-    match b.shape {
-        ShapeDesc::Box { half_extents } => Ok(DVec3::from_array(half_extents)),
-        _ => Err(format!("body \"{}\" is not a box", b.name)),
-    }
-}
-
-fn sphere_radius(b: &BodyDesc) -> Result<f64, String> {
-    match b.shape {
-        ShapeDesc::Sphere { radius } => Ok(radius),
-        _ => Err(format!("body \"{}\" is not a sphere", b.name)),
-    }
 }
 
 /// The up direction of a scene (against gravity) and the magnitude of gravity.
@@ -373,13 +351,7 @@ pub fn dominos(scene: &SceneDesc, traj: &Trajectory) -> Result<Measure, String> 
     row.sort_by(|a, b| a.position[0].total_cmp(&b.position[0]));
     let first = *row.first().ok_or("no dominos")?;
     let h = half_extents(first)?;
-    let long = if h.z >= h.x.max(h.y) {
-        DVec3::Z
-    } else if h.y >= h.x {
-        DVec3::Y
-    } else {
-        DVec3::X
-    };
+    let long = longest_axis(h);
     let mut times = Vec::with_capacity(row.len());
     for b in &row {
         let i = traj.index(&b.name)?;

@@ -214,7 +214,7 @@ fn body_desc<'a>(scene: &'a Scene, name: &str) -> Result<&'a BodyDesc, String> {
 }
 
 /// A sphere's radius.
-fn sphere_radius(b: &BodyDesc) -> Result<f64, String> {
+pub(crate) fn sphere_radius(b: &BodyDesc) -> Result<f64, String> {
     match b.shape {
         ShapeDesc::Sphere { radius } => Ok(radius),
         _ => Err(format!("body \"{}\" is not a sphere", b.name)),
@@ -222,15 +222,26 @@ fn sphere_radius(b: &BodyDesc) -> Result<f64, String> {
 }
 
 /// A box's half extents.
-fn half_extents(b: &BodyDesc) -> Result<DVec3, String> {
+pub(crate) fn half_extents(b: &BodyDesc) -> Result<DVec3, String> {
     match b.shape {
         ShapeDesc::Box { half_extents } => Ok(DVec3::from_array(half_extents)),
         _ => Err(format!("body \"{}\" is not a box", b.name)),
     }
 }
 
+/// The axis of a box's longest half extent (body frame; z, then y, on ties).
+pub(crate) fn longest_axis(h: DVec3) -> DVec3 {
+    if h.z >= h.x.max(h.y) {
+        DVec3::Z
+    } else if h.y >= h.x {
+        DVec3::Y
+    } else {
+        DVec3::X
+    }
+}
+
 /// The rotation a scene gives a body (as the simulator reads it).
-fn rotation(r: &RotationDesc) -> DQuat {
+pub(crate) fn rotation(r: &RotationDesc) -> DQuat {
     match *r {
         RotationDesc::Identity => DQuat::IDENTITY,
         RotationDesc::AxisAngle { axis, degrees } => {

@@ -5,8 +5,8 @@ use glam::DVec3;
 use impulse_sim::scene::ShapeDesc;
 
 use super::{
-    REST_REL, REST_WINDOW, Run, SceneCheck, half_extents, holds, max_mean_speed, no_penetration,
-    sphere_radius,
+    REST_REL, REST_WINDOW, Run, SceneCheck, half_extents, holds, longest_axis, max_mean_speed,
+    no_penetration, sphere_radius,
 };
 use crate::validate::case::{Check, Metric};
 
@@ -170,13 +170,7 @@ fn v16_dominos(r: &Run<'_>) -> Result<Vec<Metric>, String> {
     });
     let ids: Vec<usize> = names.iter().map(|n| r.index(n)).collect::<Result<_, _>>()?;
     let h = half_extents(r.desc(names[0])?)?;
-    let long = if h.z >= h.x.max(h.y) {
-        DVec3::Z
-    } else if h.y >= h.x {
-        DVec3::Y
-    } else {
-        DVec3::X
-    };
+    let long = longest_axis(h);
     let times: Vec<f64> = ids
         .iter()
         .map(|&i| {
