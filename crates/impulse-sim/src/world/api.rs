@@ -551,7 +551,7 @@ impl World {
         // an awake one: its island steps now.
         self.wake(i);
         if self.is_held_body(i) {
-            self.islands.next_step = self.islands.next_step.min(self.time);
+            self.step_now(i);
         }
     }
 

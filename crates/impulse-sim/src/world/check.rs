@@ -269,8 +269,10 @@ impl World {
             self.rekey_others(pair)?;
             // A body of an island was struck: its island reacts now, through its
             // constraints, before its held contacts can be driven through.
-            if self.is_held_body(pair.0) || self.is_held_body(pair.1) {
-                self.islands.next_step = self.islands.next_step.min(self.time);
+            for i in [pair.0, pair.1] {
+                if self.is_held_body(i) {
+                    self.step_now(i);
+                }
             }
         }
         let key = if held {
@@ -350,7 +352,7 @@ impl World {
             return false;
         }
         self.is_slow((a, b), x, n)
-            && super::island::rotation_speed(ba, bb)
+            && super::island::turn_speed(ba, bb, Some(n))
                 < HOLD_ROTATION_FRACTION * self.rotation_limit()
     }
 

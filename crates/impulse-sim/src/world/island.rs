@@ -22,6 +22,18 @@ const MAX_LOCATE_SOLVES: usize = 4;
 /// Default `0.999`.
 const LOCATE_DONE: f64 = 0.999;
 
+/// A held contact approaching faster than this fraction of the switching speed at the start
+/// of an island step was struck (an impulse or a new load reached its island): the island
+/// first reacts by an impulsive solve. Resting and sliding contacts start a step at the end
+/// speed the previous step solved for (within the solver tolerance, 1e-4 of the
+/// microcollision speed), so only a change from outside crosses it. Default `1e-2`.
+const STRUCK_FRACTION: f64 = 1e-2;
+
+/// Fraction of the envelope left above the rest gap that turning may use up within one
+/// island step: the rest covers the angular acceleration within the step (the step is chosen
+/// from the speeds at its start). Default `0.5`.
+const TURN_STEP_SAFETY: f64 = 0.5;
+
 /// A pair the islands hold: its manifolds of the last step and the impulse each point carried
 /// (the warm start of the next step).
 #[derive(Clone, Debug, Default)]
@@ -29,6 +41,9 @@ pub(super) struct HeldPair {
     manifolds: Vec<Manifold>,
     impulses: Vec<[DVec3; MAX_POINTS]>,
     cache: ManifoldCache,
+    /// Length of the step the impulses were solved for (s), to scale the warm start to the
+    /// next step; 0 before the first.
+    span: f64,
 }
 
 /// The islands' state in a world.
@@ -38,10 +53,11 @@ pub(super) struct Islands {
     pub(super) settings: SustainedSettings,
     /// Held pairs (slot indices, as in the heap).
     pub(super) held: FxHashMap<(u32, u32), HeldPair>,
-    /// When the next island step is due (∞ with no awake island).
+    /// When the next island step is due (∞ with no awake island): the earliest of [`Self::due`].
     pub(super) next_step: f64,
-    /// Length of the last island step (s), to scale warm-start impulses.
-    last_step: f64,
+    /// When each island body's island is next due (each island steps at its own rate; a
+    /// body not listed is due now).
+    due: FxHashMap<u32, f64>,
     /// Since when each awake island body has moved slower than the sleep speed.
     still_since: FxHashMap<u32, f64>,
 }
@@ -53,7 +69,7 @@ impl Islands {
             settings,
             held: FxHashMap::default(),
             next_step: f64::INFINITY,
-            last_step: settings.step,
+            due: FxHashMap::default(),
             still_since: FxHashMap::default(),
         }
     }
@@ -82,12 +98,29 @@ impl World {
         self.islands.settings.switch_speed_factor * self.micro_speed()
     }
 
-    /// The speed at which rotation could bring a feature of a held pair through what is
-    /// left of the contact envelope within one island step, (1 − g_r/ε_c)·ε_c / h: above it
-    /// the pair is released to the event loop, below half of it a pair may be held.
+    /// What is left of the contact envelope above a held contact's rest gap,
+    /// (1 − g_r/ε_c)·ε_c: rotation must not bring another feature through it within a step.
+    fn envelope_left(&self) -> f64 {
+        (1.0 - self.islands.settings.rest_gap_fraction) * self.collision_epsilon()
+    }
+
+    /// The turning speed ([`turn_speed`]) for which the shortest island step is needed
+    /// ([`TURN_STEP_SAFETY`]): above it the pair is released to the event loop, below half of
+    /// it a pair may be held.
     pub(super) fn rotation_limit(&self) -> f64 {
+        TURN_STEP_SAFETY * self.envelope_left() / self.islands.settings.min_step
+    }
+
+    /// The island step a pair whose surfaces rotation moves at `speed` needs: short enough
+    /// that no other feature comes through the rest of the envelope, within
+    /// [`SustainedSettings::min_step`] and [`SustainedSettings::step`].
+    fn rotation_step(&self, speed: f64) -> f64 {
         let s = &self.islands.settings;
-        (1.0 - s.rest_gap_fraction) * self.collision_epsilon() / s.step
+        if speed > 0.0 {
+            (TURN_STEP_SAFETY * self.envelope_left() / speed).clamp(s.min_step, s.step)
+        } else {
+            s.step
+        }
     }
 
     pub(super) fn is_held(&self, pair: (u32, u32)) -> bool {
@@ -103,6 +136,13 @@ impl World {
     /// by the caller) and an island step is due now.
     pub(super) fn hold(&mut self, pair: (u32, u32)) {
         self.islands.held.entry(pair).or_default();
+        self.step_now(pair.0);
+        self.step_now(pair.1);
+    }
+
+    /// Body `i`'s island steps now (it was struck, changed, woken or joined).
+    pub(super) fn step_now(&mut self, i: u32) {
+        self.islands.due.insert(i, self.time);
         self.islands.next_step = self.islands.next_step.min(self.time);
     }
 
@@ -117,6 +157,7 @@ impl World {
                 b.held_torque = DVec3::ZERO;
                 b.asleep = false;
                 self.islands.still_since.remove(&i);
+                self.islands.due.remove(&i);
             }
             if !self.stale.contains(&i) {
                 self.stale.push(i);
@@ -180,8 +221,8 @@ impl World {
             if !self.stale.contains(&j) {
                 self.stale.push(j);
             }
+            self.step_now(j);
         }
-        self.islands.next_step = self.islands.next_step.min(self.time);
         woken
     }
 
@@ -236,31 +277,27 @@ impl World {
         let t = self.time;
         let settings = self.islands.settings;
         let eps = self.collision_epsilon();
-        let warm_scale = settings.step / self.islands.last_step;
-        // 1. Manifolds of the pairs of awake bodies; lift-off releases a pair.
-        let mut pairs: Vec<(u32, u32)> = self.islands.held.keys().copied().collect();
+        // 1. Manifolds of the pairs of the islands due now (a body of theirs is due); lift-off
+        // releases a pair. Each island steps at its own rate.
+        let is_due = |w: &World, i: u32| w.islands.due.get(&i).is_none_or(|&d| d <= t);
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        for island in self.islands() {
+            if island.bodies.iter().any(|&i| is_due(self, i)) {
+                pairs.extend(&island.pairs);
+            }
+        }
         pairs.sort_unstable();
         let mut released = Vec::new();
         let mut spinning: Vec<u32> = Vec::new();
+        // Awake held pairs and how fast another of their features can approach.
+        let mut turning: Vec<((u32, u32), f64)> = Vec::new();
+        let limit = self.rotation_limit();
         for &p in &pairs {
             let live = "internal ids name live bodies";
             let ba = self.slots[p.0 as usize].body.as_ref().expect(live);
             let bb = self.slots[p.1 as usize].body.as_ref().expect(live);
             let sleeping = |b: &crate::body::Body| b.asleep || !b.is_dynamic();
             if sleeping(ba) && sleeping(bb) {
-                continue;
-            }
-            // A body turning fast enough to bring another feature through the envelope
-            // within a step is not in static contact: all its pairs go back to the event
-            // loop, which bounds them (a body half held, half hit by microcollisions would
-            // be pressed by a held load the microcollisions do not know of).
-            if rotation_speed(ba, bb) > self.rotation_limit() {
-                for (i, b) in [(p.0, ba), (p.1, bb)] {
-                    if rotation_speed(b, b) > self.rotation_limit() {
-                        spinning.push(i);
-                    }
-                }
-                released.push(p);
                 continue;
             }
             let held = self.islands.held.get_mut(&p).expect("listed above");
@@ -284,6 +321,22 @@ impl World {
                 released.push(p);
                 continue;
             }
+            // A body turning fast enough to bring another feature through the envelope
+            // even within the shortest step is not in static contact: all its pairs go back
+            // to the event loop, which bounds them (a body half held, half hit by
+            // microcollisions would be pressed by a held load the microcollisions do not
+            // know of).
+            let turn = turn_speed(ba, bb, Some(live[0].normal));
+            if turn > limit {
+                for (i, b) in [(p.0, ba), (p.1, bb)] {
+                    if rotation_speed(b, b) > limit {
+                        spinning.push(i);
+                    }
+                }
+                released.push(p);
+                continue;
+            }
+            turning.push((p, turn));
             let mut impulses = vec![[DVec3::ZERO; MAX_POINTS]; live.len()];
             for (k, m) in live.iter().enumerate() {
                 let old = held.manifolds.iter().position(|o| o.pieces == m.pieces);
@@ -291,7 +344,7 @@ impl World {
                     let map = manifold::match_points(&held.manifolds[j], m, eps);
                     for (q, o) in map.iter().enumerate() {
                         if let Some(o) = o {
-                            impulses[k][q] = held.impulses[j][*o] * warm_scale;
+                            impulses[k][q] = held.impulses[j][*o];
                         }
                     }
                 }
@@ -315,11 +368,14 @@ impl World {
         for p in released {
             self.release(p);
         }
-        // 2. Each awake island: wake the whole of a partly sleeping one, solve, hold.
-        let mut next = f64::INFINITY;
+        // 2. Each awake island with a body due: wake the whole of a partly sleeping one, step
+        // it as long as its fastest-turning pair allows (the warm start is each pair's last
+        // impulses scaled to that step), solve, hold.
         let mut touched: Vec<u32> = Vec::new();
         for island in self.islands() {
-            if island.bodies.iter().all(|&i| self.b(i).asleep) {
+            if island.bodies.iter().all(|&i| self.b(i).asleep)
+                || !island.bodies.iter().any(|&i| is_due(self, i))
+            {
                 continue;
             }
             for &i in &island.bodies {
@@ -327,17 +383,46 @@ impl World {
                     self.b_mut(i).asleep = false;
                 }
             }
-            let h = self.step_island(&island)?;
-            next = next.min(h);
+            let h0 = turning
+                .iter()
+                .filter(|(p, _)| island.pairs.binary_search(p).is_ok())
+                .map(|&(_, turn)| self.rotation_step(turn))
+                .fold(settings.step, f64::min);
+            for p in &island.pairs {
+                let held = self
+                    .islands
+                    .held
+                    .get_mut(p)
+                    .expect("an island's pairs are held");
+                if held.span > 0.0 {
+                    let scale = h0 / held.span;
+                    for imp in held.impulses.iter_mut().flatten() {
+                        *imp *= scale;
+                    }
+                }
+            }
+            let h = self.step_island(&island, h0)?;
+            for p in &island.pairs {
+                if let Some(held) = self.islands.held.get_mut(p) {
+                    held.span = h;
+                }
+            }
+            for &i in &island.bodies {
+                self.islands.due.insert(i, t + h);
+            }
             touched.extend(&island.bodies);
             self.counters.island_steps += 1;
             self.sleep_if_still(&island);
         }
-        if next.is_finite() {
-            self.islands.last_step = next;
-            self.islands.next_step = t + next;
-        } else {
-            self.islands.next_step = f64::INFINITY;
+        // The next island step: the earliest due body of an awake island.
+        self.islands.next_step = f64::INFINITY;
+        for island in self.islands() {
+            for &i in &island.bodies {
+                if !self.b(i).asleep {
+                    let due = self.islands.due.get(&i).copied().unwrap_or(t);
+                    self.islands.next_step = self.islands.next_step.min(due);
+                }
+            }
         }
         touched.sort_unstable();
         touched.dedup();
@@ -348,9 +433,9 @@ impl World {
         self.rekey(&stale, None)
     }
 
-    /// Solves one island's contacts over the coming step, sets its bodies' held contact loads,
-    /// and returns the step's length (shortened to a slip → stick transition).
-    fn step_island(&mut self, island: &Island) -> Result<f64, SimError> {
+    /// Solves one island's contacts over the coming step of length `h0`, sets its bodies' held
+    /// contact loads, and returns the step's length (shortened to a slip → stick transition).
+    fn step_island(&mut self, island: &Island, h0: f64) -> Result<f64, SimError> {
         let settings = self.islands.settings;
         let eps = self.collision_epsilon();
         let v_micro = self.micro_speed();
@@ -417,13 +502,14 @@ impl World {
                 }
             }
         }
-        // Transients: a held contact approaching faster than v_s gets an impulsive solve of its
-        // island first (e = 0 between held contacts).
+        // Transients: a held contact approaching (faster than STRUCK_FRACTION·v_s) gets an
+        // impulsive solve of its island first (e = 0 between held contacts): the island reacts
+        // to a strike at once, through its constraints, not over a step.
         let approach = contacts
             .iter()
             .map(|c| normal_speed(&bodies, c))
             .fold(f64::INFINITY, f64::min);
-        if approach < -v_s {
+        if approach < -STRUCK_FRACTION * v_s {
             let mut jolt = contacts.clone();
             for (c, &gap) in jolt.iter_mut().zip(&gaps) {
                 c.impulse = DVec3::ZERO;
@@ -435,7 +521,7 @@ impl World {
         }
         let after_jolt = bodies.clone();
         // The step: predict, solve, and locate a slip → stick transition.
-        let mut h = settings.step;
+        let mut h = h0;
         let mut solved;
         let mut tries = 0;
         loop {
@@ -587,6 +673,24 @@ pub(super) fn rotation_speed(a: &crate::body::Body, b: &crate::body::Body) -> f6
         }
     };
     turn(a) + turn(b)
+}
+
+/// How fast another feature of a held pair can approach: its bodies' rotation
+/// ([`rotation_speed`]) plus their centres' relative speed along the contact normal `n` (a body
+/// pivoting on an edge moves its centre toward the other body as it turns); the whole relative
+/// speed of the centres when no normal is known yet. Sliding along the contact plane brings
+/// no feature of two convex pieces closer.
+pub(super) fn turn_speed(a: &crate::body::Body, b: &crate::body::Body, n: Option<DVec3>) -> f64 {
+    let v = |x: &crate::body::Body| {
+        if x.is_dynamic() && !x.asleep {
+            x.velocity
+        } else {
+            DVec3::ZERO
+        }
+    };
+    let dv = v(a) - v(b);
+    let normal = n.map_or(dv.length(), |n| dv.dot(n.normalize_or_zero()).abs());
+    rotation_speed(a, b) + normal
 }
 
 /// Relative normal speed of a contact (positive apart).

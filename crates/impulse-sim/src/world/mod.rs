@@ -575,6 +575,18 @@ impl World {
         self.schedule.collision_epsilon
     }
 
+    /// The pairs the switching model holds as constraints now (empty in the impulse model), in
+    /// slot order: the contacts an island step solves, not the event loop.
+    #[must_use]
+    pub fn held_pairs(&self) -> Vec<(BodyHandle, BodyHandle)> {
+        let mut pairs: Vec<(u32, u32)> = self.islands.held.keys().copied().collect();
+        pairs.sort_unstable();
+        pairs
+            .into_iter()
+            .map(|(a, b)| (self.handle_of(a), self.handle_of(b)))
+            .collect()
+    }
+
     /// Event counters so far.
     #[must_use]
     pub fn counters(&self) -> Counters {
