@@ -677,9 +677,10 @@ pub(super) fn rotation_speed(a: &crate::body::Body, b: &crate::body::Body) -> f6
 
 /// How fast another feature of a held pair can approach: its bodies' rotation
 /// ([`rotation_speed`]) plus their centres' relative speed along the contact normal `n` (a body
-/// pivoting on an edge moves its centre toward the other body as it turns); the whole relative
-/// speed of the centres when no normal is known yet. Sliding along the contact plane brings
-/// no feature of two convex pieces closer.
+/// pivoting on an edge moves its centre toward the other body as it turns). Sliding along the
+/// contact plane brings no feature of two convex pieces closer, but it can bring another
+/// piece of a compound body (a ball rolling from a dish's slope onto its floor): with a
+/// compound, or when no normal is known yet, the whole relative speed of the centres counts.
 pub(super) fn turn_speed(a: &crate::body::Body, b: &crate::body::Body, n: Option<DVec3>) -> f64 {
     let v = |x: &crate::body::Body| {
         if x.is_dynamic() && !x.asleep {
@@ -689,7 +690,11 @@ pub(super) fn turn_speed(a: &crate::body::Body, b: &crate::body::Body, n: Option
         }
     };
     let dv = v(a) - v(b);
-    let normal = n.map_or(dv.length(), |n| dv.dot(n.normalize_or_zero()).abs());
+    let compound = a.reach.len() > 1 || b.reach.len() > 1;
+    let normal = match n {
+        Some(n) if !compound => dv.dot(n.normalize_or_zero()).abs(),
+        _ => dv.length(),
+    };
     rotation_speed(a, b) + normal
 }
 
