@@ -1,5 +1,7 @@
 //! The stack study of `cargo xtask bench` (thesis §3.5: stacks are the impulse-based method's
-//! known weak spot: "three books are noticeably slower; four or more grind to a halt").
+//! known weak spot: "three books are noticeably slower; four or more grind to a halt"), run in
+//! the pure impulse model ([`ContactMode::Impulse`]; `cargo xtask bench --peers` runs stacks in
+//! both models).
 //!
 //! Stacks of 1 to 8 wooden blocks (10 × 7.5 × 5 cm, ρ = 700 kg/m³) are released at rest, ε_c/2
 //! apart, on a fixed floor (μ = 0.5, e = 0.3, ε_c = 0.2 mm) and simulated for one second. The
@@ -12,7 +14,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use impulse_sim::scene::{BodyDesc, ContactDesc, ShapeDesc};
-use impulse_sim::{Scene, SceneDesc, World, run};
+use impulse_sim::{ContactMode, Scene, SceneDesc, World, run};
 
 use crate::Result;
 
@@ -65,7 +67,9 @@ pub fn stack_scene(n: usize) -> SceneDesc {
 
 /// Runs one stack.
 pub fn run_stack(n: usize) -> Result<StackRow> {
-    let scene = Scene::new(stack_scene(n), Path::new("."));
+    // The study measures the pure impulse model (the peer bench runs both models).
+    let desc = stack_scene(n).with_contact_model(ContactMode::Impulse);
+    let scene = Scene::new(desc, Path::new("."));
     let mut world = World::from_scene(&scene).map_err(|e| format!("stack {n}: {e}"))?;
     let start = Instant::now();
     let rec =

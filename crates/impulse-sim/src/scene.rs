@@ -72,7 +72,7 @@ pub struct SceneDesc {
     pub accuracy: AccuracyDesc,
     /// How contacts are modelled: `Impulse` (every contact an impulse, thesis chapters 2–3)
     /// or `Switching` (impacts as impulses, sustained contact as constraints, thesis §8.1;
-    /// [`crate::sustained`]). Default `Impulse`.
+    /// [`crate::sustained`]). Default `Switching`.
     #[serde(default)]
     pub contact_model: crate::sustained::ContactMode,
     /// The bodies.

@@ -52,10 +52,10 @@ use serde::{Deserialize, Serialize};
 pub enum ContactMode {
     /// Every contact is an impulse (thesis chapters 2–3): collisions, and microcollisions for
     /// resting contact.
-    #[default]
     Impulse,
     /// Impacts are impulses, sustained contact is a constraint (thesis §8.1; module
-    /// documentation).
+    /// documentation). The default.
+    #[default]
     Switching,
 }
 

@@ -202,7 +202,7 @@ fn exact_ellipsoid_mass_properties_and_level_validation() {
     assert!(err.contains("shape.level"), "{err}");
 }
 
-/// A ball released ε_c/2 above a floor and left for 5 s. A ball's distance to anything
+/// A ball released ε_c/2 above a floor and left for 5 s, in the pure impulse model. A ball's distance to anything
 /// changes only with its centre, so its time-of-impact bound is exact: it is checked when it
 /// reaches contact, reversed by a microcollision (e = 1 in effect, no energy change), and
 /// checked again only when it can be back at contact. So it bounces from its release height
@@ -214,6 +214,7 @@ fn resting_ball_bounces_with_the_free_fall_period() {
     let (eps, g, t_end): (f64, f64, f64) = (1e-4, 9.81, 5.0);
     let ron = format!(
         "Scene(gravity: (0, 0, -{g}), duration: {t_end}, collision_epsilon: {eps},
+          contact_model: Impulse,
           default_contact: Contact(friction: 0.5, restitution: 0.0),
           bodies: [
             Body(name: \"floor\", shape: Box(half_extents: (1, 1, 0.5)), position: (0, 0, -0.5), motion: Fixed),
@@ -249,11 +250,13 @@ fn resting_ball_bounces_with_the_free_fall_period() {
 /// the rebound limit of boosted microcollisions, the boost (e up to 5 at the depths where the
 /// loop resolves resting contacts) pumped energy in: gaps reached 4–9 ε_c, the ball left the
 /// envelope and came back as ordinary collisions.
+/// (The pure impulse model: in the switching model these contacts are held.)
 #[test]
 fn ball_in_a_corner_rests_within_the_envelope() {
     let eps: f64 = 2e-5;
     let ron = format!(
         "Scene(gravity: (0, 0, -9.81), duration: 2.0, collision_epsilon: {eps},
+          contact_model: Impulse,
           default_contact: Contact(friction: 0.3, restitution: 0.3),
           bodies: [
             Body(name: \"dish\", motion: Fixed, shape: Compound(parts: [

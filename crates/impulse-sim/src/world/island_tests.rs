@@ -385,11 +385,11 @@ fn switching_runs_are_deterministic_across_thread_counts() {
 /// The scene option reads as documented, and bad settings are refused by name.
 #[test]
 fn contact_model_is_a_scene_option_and_settings_are_checked() {
-    let text = "Scene(contact_model: Switching, bodies: [])";
+    let text = "Scene(contact_model: Impulse, bodies: [])";
     let desc: SceneDesc = ron::from_str(text).expect("parses");
-    assert_eq!(desc.contact_model, ContactMode::Switching);
+    assert_eq!(desc.contact_model, ContactMode::Impulse);
     let default: SceneDesc = ron::from_str("Scene(bodies: [])").expect("parses");
-    assert_eq!(default.contact_model, ContactMode::Impulse);
+    assert_eq!(default.contact_model, ContactMode::Switching);
     assert!(ron::from_str::<SceneDesc>("Scene(contact_model: Glue, bodies: [])").is_err());
     for (bad, field) in [
         (

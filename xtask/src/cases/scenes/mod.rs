@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DQuat, DVec3};
 use impulse_sim::scene::{BodyDesc, ContactDesc, RotationDesc, ShapeDesc};
-use impulse_sim::{Recording, Scene, World, run};
+use impulse_sim::{ContactMode, Recording, Scene, World, run};
 
 use crate::validate::case::{Case, Check, Metric};
 
@@ -80,23 +80,37 @@ pub fn scene_checks() -> Vec<SceneCheck> {
     all
 }
 
-/// The scene cases of `validate`: every scene check, then the determinism case.
+/// Suffix of the cases that run a scene in the thesis's pure impulse model
+/// ([`ContactMode::Impulse`]); the unsuffixed case runs it as bundled, in the default model.
+pub const IMPULSE_SUFFIX: &str = "-impulse";
+
+/// The scene cases of `validate`: every scene check as bundled (the default contact model,
+/// [`ContactMode::Switching`]) and again in the pure impulse model, which keeps its own
+/// validation; then the determinism case.
 pub fn cases() -> Vec<Case> {
-    let mut cases: Vec<Case> = scene_checks()
-        .into_iter()
-        .map(|check| Case {
-            name: check.case,
-            description: check.description,
-            run: Box::new(move || {
-                let (scene, world, rec) = record(check.scene, check.event_log, true)?;
-                (check.metrics)(&Run {
-                    scene: &scene,
-                    world: &world,
-                    rec: &rec,
-                })
-            }),
-        })
-        .collect();
+    let mut cases: Vec<Case> = Vec::new();
+    for check in scene_checks() {
+        for mode in [None, Some(ContactMode::Impulse)] {
+            let name: &'static str = match mode {
+                None => check.case,
+                // One name per case for the process's life (the case table outlives any scope).
+                Some(_) => Box::leak(format!("{}{IMPULSE_SUFFIX}", check.case).into_boxed_str()),
+            };
+            let (scene_name, event_log, metrics) = (check.scene, check.event_log, check.metrics);
+            cases.push(Case {
+                name,
+                description: check.description,
+                run: Box::new(move || {
+                    let (scene, world, rec) = record(scene_name, event_log, true, mode)?;
+                    metrics(&Run {
+                        scene: &scene,
+                        world: &world,
+                        rec: &rec,
+                    })
+                }),
+            });
+        }
+    }
     cases.push(Case {
         name: "determinism-threads",
         description: "tumbling box run on 1 and on 2 threads: bit-identical trajectories (hash)",
@@ -142,13 +156,17 @@ pub fn run_scene(
     Ok((world, rec))
 }
 
-/// Reads and runs a bundled scene.
+/// Reads and runs a bundled scene, in contact model `mode` when given (as bundled otherwise).
 fn record(
     name: &str,
     event_log: bool,
     checking: bool,
+    mode: Option<ContactMode>,
 ) -> Result<(Scene, World, Recording), String> {
-    let scene = load_scene(name)?;
+    let mut scene = load_scene(name)?;
+    if let Some(mode) = mode {
+        scene.desc.contact_model = mode;
+    }
     let (world, rec) = run_scene(&scene, event_log, checking)?;
     Ok((scene, world, rec))
 }
