@@ -59,6 +59,11 @@ enum Command {
         /// on it.
         #[arg(long)]
         threads: Option<usize>,
+        /// Contact model, overriding the scene's `contact_model`: `switching` (impacts as
+        /// impulses, sustained contact as constraints; the default) or `impulse` (every
+        /// contact an impulse, the thesis's pure model).
+        #[arg(long, value_enum)]
+        contact_model: Option<run::ContactModelArg>,
     },
     /// Exact mass properties of a closed polygon mesh (Wavefront OBJ), printed as JSON.
     ///
@@ -163,12 +168,14 @@ fn main() -> ExitCode {
             out,
             plot,
             threads,
+            contact_model,
         } => run::run(&run::RunArgs {
             scene,
             until: *until,
             out: out.as_deref(),
             plot: plot.as_deref(),
             threads: *threads,
+            contact_model: *contact_model,
         }),
         Command::Massprops {
             mesh,

@@ -284,3 +284,47 @@ fn odd_names_stay_valid_json_and_csv() {
         "{text}"
     );
 }
+
+/// `--contact-model` overrides the scene's model: the block drop's two blocks come to rest
+/// on microcollisions in the impulse model (none held), and on held contacts in the default
+/// switching model (island steps, and far fewer microcollisions); a wrong name is refused.
+#[test]
+fn contact_model_option_overrides_the_scene() {
+    let scene = scenes().join("block-drop.ron");
+    let number = |text: &str, label: &str| -> u64 {
+        let line = text.lines().find(|l| l.starts_with(label)).unwrap();
+        let rest = line[label.len()..].trim_start();
+        let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+        digits.parse().unwrap()
+    };
+    let (ok, impulse_out, _) =
+        impulse(&["run", scene.to_str().unwrap(), "--contact-model", "impulse"]);
+    assert!(ok);
+    assert!(
+        impulse_out.contains("contact model:    impulse\n"),
+        "{impulse_out}"
+    );
+    let (ok, switching_out, _) = impulse(&["run", scene.to_str().unwrap()]);
+    assert!(ok);
+    let line = switching_out
+        .lines()
+        .find(|l| l.starts_with("contact model:    switching: "))
+        .unwrap();
+    let steps: u64 = line["contact model:    switching: ".len()..]
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(steps > 0, "{switching_out}");
+    let (micro_i, micro_s) = (
+        number(&impulse_out, "microcollisions:"),
+        number(&switching_out, "microcollisions:"),
+    );
+    assert!(micro_i > 10 * micro_s.max(1), "{micro_i} vs {micro_s}");
+    let (ok, _, stderr) = impulse(&["run", scene.to_str().unwrap(), "--contact-model", "glue"]);
+    assert!(
+        !ok && stderr.contains("possible values: switching, impulse"),
+        "{stderr}"
+    );
+}
