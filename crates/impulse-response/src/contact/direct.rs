@@ -44,6 +44,10 @@ pub const MAX_ROUNDS: usize = 16;
 /// `1e-9`.
 pub const LAW_SLACK: f64 = 1e-9;
 
+/// A sliding contact's friction direction is taken from the slip the solve finds when the two
+/// differ by more than the angle of this cosine (about 0.8°). Default `1 − 1e-4`.
+pub const SLIDE_DIRECTION_COS: f64 = 1.0 - 1e-4;
+
 #[derive(Clone, Copy, PartialEq)]
 enum Class {
     Off,
@@ -186,9 +190,28 @@ fn solve_from(
                 Class::Slide(_) => rhs[(offset[k], 0)] = target - u_now[k].z,
             }
         }
+        // Tikhonov on the *total* impulse, not on its change: min ‖W·ΔP − b‖ + λ‖P + ΔP‖ gives
+        // (W + λ)·ΔP = b − λ·P. Along W's null space (the internal stresses of redundant
+        // corners: pairs pushing or rubbing against each other to no effect) this sets
+        // ΔP = −P exactly, whatever λ: the warm start's stresses are removed instead of
+        // carried (they put resting corners on their friction cones, and the active set then
+        // flipped between sticking and sliding every round without converging).
         let diag = (0..m).map(|i| a[(i, i)].abs()).fold(0.0_f64, f64::max);
+        let lambda = REGULARISATION * diag;
         for i in 0..m {
-            a[(i, i)] += REGULARISATION * diag;
+            a[(i, i)] += lambda;
+        }
+        for k in 0..n {
+            let p = contacts[k].impulse;
+            match class[k] {
+                Class::Off => {}
+                Class::Stick => {
+                    for r in 0..3 {
+                        rhs[(offset[k] + r, 0)] -= lambda * p[r];
+                    }
+                }
+                Class::Slide(_) => rhs[(offset[k], 0)] -= lambda * p.z,
+            }
         }
         let x = a.partial_piv_lu().solve(&rhs);
         if !(0..m).all(|i| x[(i, 0)].is_finite()) {
@@ -228,10 +251,22 @@ fn solve_from(
                     class[k] = Class::Stick;
                     changed = true;
                 }
-                // Sliding friction must oppose the slip it finds; slip that stopped or turned
-                // means the contact sticks.
-                Class::Slide(d) if u_t.dot(d) > -tolerance => {
+                // Sliding friction must oppose the slip it finds; slip that turned means the
+                // contact sticks. Slip that stopped (within the tolerance) is a contact
+                // sticking on its cone's rim, which the laws allow: flipping it to Stick
+                // would put its friction just outside the cone, and the two classes would
+                // alternate every round.
+                Class::Slide(d) if u_t.dot(d) > tolerance => {
                     class[k] = Class::Stick;
+                    changed = true;
+                }
+                // Sliding on: friction must point against the slip the solve finds, not
+                // where the last guess put it.
+                Class::Slide(d)
+                    if u_t.length() > tolerance
+                        && (-u_t / u_t.length()).dot(d) < SLIDE_DIRECTION_COS =>
+                {
+                    class[k] = Class::Slide(-u_t / u_t.length());
                     changed = true;
                 }
                 _ => {}
