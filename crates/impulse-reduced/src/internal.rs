@@ -7,10 +7,12 @@
 //! `w = K ξ` of §6) and the rotation of the reference pose (`H_l exp(ξ_l) = exp(Ad_{R_l} ξ_l)
 //! H_l` with `Ad_{R_l} = diag(R_l, R_l)`), so a step is one 6 × 6|E| product per link, the
 //! exponential's coefficients, and a quaternion product with the fixed reference rotation.
-//! Links are stored structure-of-arrays, [`LANES`] links side by side, so the compiler turns
-//! the arithmetic of a group of links into vector instructions; the exponential's
-//! coefficients are polynomials in θ² ([`EXP_POLY_ANGLE`]), without square root, division or
-//! trigonometry for every rotation a linear model is used for.
+//! Links are stored structure-of-arrays, [`LANES`] links side by side, and their arithmetic
+//! runs on AVX vectors where the processor has them ([`crate::lanes`], chosen at run time).
+//! The exponential's coefficients are Taylor series in θ² up to [`EXP_POLY_ANGLE`] (no square
+//! root, division or trigonometry), and above it vectorised trigonometry of the half angle
+//! (reduction by multiples of π/2, series on `[−π/4, π/4]`) up to [`EXP_REDUCED_ANGLE`]; libm
+//! only beyond. All agree with `Pose::exp` to round-off (tested).
 //!
 //! Outputs do not depend on the thread count: each link's pose is computed by the same
 //! sequence of operations whatever thread runs it (a lane's result never depends on the other
@@ -22,26 +24,63 @@ use impulse_geom::{Pose, Twist};
 use rayon::prelude::*;
 
 use crate::construct::ReducedModel;
+use crate::lanes::{Lanes, Ops, Portable};
 
-/// Links per rayon task. Large enough that a task (≈ 32 × 30 ns) outweighs the scheduling
+/// Links per rayon task. Large enough that a task (≈ 32 × 40 ns) outweighs the scheduling
 /// cost, small enough that a 400-link helix still splits into 13 tasks for 2–8 threads. The
 /// paper reports that batching per thread mattered (§8.3). A multiple of [`LANES`].
 pub const LINK_BATCH: usize = 32;
 
-/// Links computed side by side (one structure-of-arrays group): four f64 lanes are two SSE2
-/// or one AVX register per quantity.
+/// Links computed side by side (one structure-of-arrays group): four f64 lanes are one AVX
+/// register per quantity.
 pub const LANES: usize = 4;
 
 /// Largest rotation angle θ (rad) whose exponential-map coefficients [`InternalLinks`] and
-/// [`fast_exp`] take from the truncated Taylor series below; larger angles use `sin_cos`.
+/// [`fast_exp`] take from the truncated Taylor series below; larger angles use trigonometry
+/// (see [`EXP_REDUCED_ANGLE`]; [`fast_exp`] uses libm's `sin_cos`).
 /// Each series is cut where its first omitted term is below 2⁻⁵⁶ of its value at θ = 1 rad, so
 /// the truncation is under a quarter ulp (round-off of the Horner sums dominates: equal to
 /// `Pose::exp` to round-off, tested on both sides of the switch). One radian covers every
 /// rotation a first-order model is meant for, with three more terms per series than 0.5 rad.
 pub const EXP_POLY_ANGLE: f64 = 1.0;
 
+/// Largest rotation angle θ (rad) whose exponential-map coefficients [`InternalLinks`] takes
+/// from vectorised trigonometry (the half angle reduced to `[−π/4, π/4]` by multiples of
+/// `π/2`, then Taylor series); above, libm's `sin_cos`. The quadrant count stays below 2²⁰,
+/// where the two-part `π/2` of the reduction keeps `r` exact to ~1e-16 absolute.
+pub const EXP_REDUCED_ANGLE: f64 = 1e6;
+
+/// `sin r = r Σ (−r²)ʲ / (2j+1)!`, coefficients of r^{2j} (j = 0..8): for `|r| ≤ π/4` the first
+/// omitted term is below 1e-19.
+pub(crate) const SERIES_SIN: [f64; 9] = [
+    1.0,
+    -1.0 / 6.0,
+    1.0 / 120.0,
+    -1.0 / 5_040.0,
+    1.0 / 362_880.0,
+    -1.0 / 39_916_800.0,
+    1.0 / 6_227_020_800.0,
+    -1.0 / 1_307_674_368_000.0,
+    1.0 / 355_687_428_096_000.0,
+];
+
+/// `cos r = Σ (−r²)ʲ / (2j)!`, coefficients of r^{2j} (j = 0..9): for `|r| ≤ π/4` the first
+/// omitted term is below 1e-20.
+pub(crate) const SERIES_COS: [f64; 10] = [
+    1.0,
+    -1.0 / 2.0,
+    1.0 / 24.0,
+    -1.0 / 720.0,
+    1.0 / 40_320.0,
+    -1.0 / 3_628_800.0,
+    1.0 / 479_001_600.0,
+    -1.0 / 87_178_291_200.0,
+    1.0 / 20_922_789_888_000.0,
+    -1.0 / 6_402_373_705_728_000.0,
+];
+
 /// `sin(θ/2)/θ = ½ Σ (−θ²/4)ʲ / (2j+1)!`, coefficients of θ^{2j} (j = 0..7).
-const SERIES_K: [f64; 8] = [
+pub(crate) const SERIES_K: [f64; 8] = [
     1.0 / 2.0,
     -1.0 / 48.0,
     1.0 / 3_840.0,
@@ -53,7 +92,7 @@ const SERIES_K: [f64; 8] = [
 ];
 
 /// `cos(θ/2) = Σ (−θ²/4)ʲ / (2j)!`, coefficients of θ^{2j} (j = 0..7).
-const SERIES_C: [f64; 8] = [
+pub(crate) const SERIES_C: [f64; 8] = [
     1.0,
     -1.0 / 8.0,
     1.0 / 384.0,
@@ -65,7 +104,7 @@ const SERIES_C: [f64; 8] = [
 ];
 
 /// `(θ − sin θ)/θ³ = Σ (−θ²)ʲ / (2j+3)!`, coefficients of θ^{2j} (j = 0..8).
-const SERIES_B: [f64; 9] = [
+pub(crate) const SERIES_B: [f64; 9] = [
     1.0 / 6.0,
     -1.0 / 120.0,
     1.0 / 5_040.0,
@@ -79,7 +118,7 @@ const SERIES_B: [f64; 9] = [
 
 /// Horner evaluation of `Σ coeffs[j] x^j`.
 #[inline(always)]
-fn horner<const N: usize>(coeffs: &[f64; N], x: f64) -> f64 {
+pub(crate) fn horner<const N: usize>(coeffs: &[f64; N], x: f64) -> f64 {
     coeffs.iter().rev().fold(0.0, |acc, &c| acc * x + c)
 }
 
@@ -102,7 +141,7 @@ fn exp_coefficients(t2: f64) -> (f64, f64, f64) {
 /// [`exp_coefficients`] by trigonometry (angles above [`EXP_POLY_ANGLE`]): one square root and
 /// one `sin_cos` of the half angle, `sin θ = 2 sin(θ/2) cos(θ/2)`.
 #[inline(never)]
-fn exp_coefficients_trig(t2: f64) -> (f64, f64, f64) {
+pub(crate) fn exp_coefficients_trig(t2: f64) -> (f64, f64, f64) {
     let theta = t2.sqrt();
     let (sh, ch) = (0.5 * theta).sin_cos();
     (sh / theta, ch, (theta - 2.0 * sh * ch) / (t2 * theta))
@@ -159,25 +198,6 @@ pub fn place(reference: &Pose, xi: &Twist) -> Pose {
         rotation: reference.rotation * e.rotation,
         translation: reference.rotation * e.translation + reference.translation,
     }
-}
-
-/// One value per lane of a group.
-type Lanes = [f64; LANES];
-
-/// Lane-wise `a · b`.
-#[inline(always)]
-fn mul(a: Lanes, b: Lanes) -> Lanes {
-    core::array::from_fn(|l| a[l] * b[l])
-}
-
-/// Lane-wise cross product of `[x, y, z]` lane vectors.
-#[inline(always)]
-fn cross(a: &[Lanes; 3], b: &[Lanes; 3]) -> [Lanes; 3] {
-    [
-        core::array::from_fn(|l| a[1][l] * b[2][l] - a[2][l] * b[1][l]),
-        core::array::from_fn(|l| a[2][l] * b[0][l] - a[0][l] * b[2][l]),
-        core::array::from_fn(|l| a[0][l] * b[1][l] - a[1][l] * b[0][l]),
-    ]
 }
 
 /// Per-link data of a model's internal links, laid out for the per-step pose update
@@ -272,12 +292,10 @@ impl InternalLinks {
         );
         let moving = *frame != Pose::IDENTITY;
         let batch = |first_group: usize, chunk: &mut [Pose]| {
-            for (j, links) in chunk.chunks_mut(LANES).enumerate() {
-                self.place_group(first_group + j, xi, links);
-                if moving {
-                    for p in links {
-                        *p = *frame * *p;
-                    }
+            self.place_groups(first_group, xi, chunk);
+            if moving {
+                for p in chunk {
+                    *p = *frame * *p;
                 }
             }
         };
@@ -290,57 +308,55 @@ impl InternalLinks {
         }
     }
 
-    /// Poses `H_l exp(ξ_l)` of the links of group `g` (as many as `out` holds).
+    /// Places the links of `out`, groups `first_group…`: with AVX vectors where the processor
+    /// has them, plain arrays otherwise (the same bits, see [`crate::lanes`]).
+    fn place_groups(&self, first_group: usize, xi: &[f64], out: &mut [Pose]) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(simd) = pulp::x86::V3::try_new() {
+            simd.vectorize(AvxBatch {
+                simd,
+                links: self,
+                first_group,
+                xi,
+                out,
+            });
+            return;
+        }
+        self.place_groups_with(Portable, first_group, xi, out);
+    }
+
+    /// [`InternalLinks::place_groups`] with the lane arithmetic `o`.
     #[inline(always)]
-    fn place_group(&self, g: usize, xi: &[f64], out: &mut [Pose]) {
-        let n = self.dofs;
-        let map = &self.maps[g * n * 6..(g + 1) * n * 6];
-        // ξ'_l = Ad_{R_l} T_l K ξ (eq. 22), six running sums per lane.
-        let mut t = [[0.0; LANES]; 6];
-        for (col, &x) in map.chunks_exact(6).zip(xi) {
-            for (acc, m) in t.iter_mut().zip(col) {
-                for l in 0..LANES {
-                    acc[l] += m[l] * x;
-                }
-            }
+    fn place_groups_with<O: Ops>(&self, o: O, first_group: usize, xi: &[f64], out: &mut [Pose]) {
+        let width = self.dofs * 6;
+        for (j, links) in out.chunks_mut(LANES).enumerate() {
+            let g = first_group + j;
+            let map = &self.maps[g * width..(g + 1) * width];
+            crate::lanes::place_group(o, map, xi, &self.reference[g], links);
         }
-        let v = [t[0], t[1], t[2]];
-        let w = [t[3], t[4], t[5]];
-        let t2: Lanes =
-            core::array::from_fn(|l| w[0][l] * w[0][l] + w[1][l] * w[1][l] + w[2][l] * w[2][l]);
-        // Exponential coefficients: the series for every lane (vectorised), then the rare lane
-        // above EXP_POLY_ANGLE by trigonometry; each lane's value depends on its θ² only.
-        let mut k: Lanes = core::array::from_fn(|l| horner(&SERIES_K, t2[l]));
-        let mut c: Lanes = core::array::from_fn(|l| horner(&SERIES_C, t2[l]));
-        let mut b: Lanes = core::array::from_fn(|l| horner(&SERIES_B, t2[l]));
-        for l in 0..LANES {
-            if t2[l] >= EXP_POLY_ANGLE * EXP_POLY_ANGLE {
-                (k[l], c[l], b[l]) = exp_coefficients_trig(t2[l]);
-            }
-        }
-        let a: Lanes = core::array::from_fn(|l| 2.0 * k[l] * k[l]);
-        // Translation (MLS eq. 2.36): V(ω') v' + p_l = v' + a ω'×v' + b ω'×(ω'×v') + p_l.
-        let wv = cross(&w, &v);
-        let wwv = cross(&w, &wv);
-        let h = &self.reference[g];
-        let p: [Lanes; 3] = core::array::from_fn(|i| {
-            core::array::from_fn(|l| v[i][l] + wv[i][l] * a[l] + wwv[i][l] * b[l] + h[4 + i][l])
-        });
-        // Rotation (eq. 6): exp(ω') q_l with exp(ω') = (k ω', c) (Hamilton product).
-        let [ex, ey, ez] = [mul(w[0], k), mul(w[1], k), mul(w[2], k)];
-        let [rx, ry, rz, rw] = [h[0], h[1], h[2], h[3]];
-        let q: [Lanes; 4] = [
-            core::array::from_fn(|l| c[l] * rx[l] + ex[l] * rw[l] + ey[l] * rz[l] - ez[l] * ry[l]),
-            core::array::from_fn(|l| c[l] * ry[l] - ex[l] * rz[l] + ey[l] * rw[l] + ez[l] * rx[l]),
-            core::array::from_fn(|l| c[l] * rz[l] + ex[l] * ry[l] - ey[l] * rx[l] + ez[l] * rw[l]),
-            core::array::from_fn(|l| c[l] * rw[l] - ex[l] * rx[l] - ey[l] * ry[l] - ez[l] * rz[l]),
-        ];
-        for (l, pose) in out.iter_mut().enumerate() {
-            *pose = Pose {
-                rotation: DQuat::from_xyzw(q[0][l], q[1][l], q[2][l], q[3][l]),
-                translation: DVec3::new(p[0][l], p[1][l], p[2][l]),
-            };
-        }
+    }
+}
+
+/// Consecutive groups of links from `first_group` on, placed by one call compiled with the
+/// AVX target features (`pulp` runs [`pulp::NullaryFnOnce::call`] inside a function that
+/// enables them; everything below is inlined into it).
+#[cfg(target_arch = "x86_64")]
+struct AvxBatch<'a> {
+    simd: pulp::x86::V3,
+    links: &'a InternalLinks,
+    first_group: usize,
+    xi: &'a [f64],
+    out: &'a mut [Pose],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl pulp::NullaryFnOnce for AvxBatch<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn call(self) {
+        self.links
+            .place_groups_with(self.simd, self.first_group, self.xi, self.out);
     }
 }
 

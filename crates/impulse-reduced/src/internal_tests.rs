@@ -23,8 +23,9 @@ fn bits(p: &[Pose]) -> Vec<u64> {
 const FAST_EXP_REL: f64 = 1e-14;
 
 /// [`InternalLinks::update`] against `frame · H_l · Pose::exp(T_l K ξ)` computed link by link
-/// through the model's own twist maps: quaternion components, translation relative to the
-/// mechanism's bounding radius. The kernel forms `(R_l T_l K) ξ` instead of `T_l (K ξ)`, so
+/// through the model's own twist maps: quaternion components, and translation relative to the
+/// mechanism's bounding radius (or the translation, if larger), both per `max(1, θ_l)` (the
+/// round-off of a twist grows with it and turns the pose by as much). The kernel forms `(R_l T_l K) ξ` instead of `T_l (K ξ)`, so
 /// the twists agree to the round-off of those products (a few ulp of `|T||K||ξ|`), not bitwise.
 const KERNEL_REL: f64 = 1e-13;
 
@@ -85,7 +86,7 @@ fn kernel_equals_pose_exp_of_twist_maps() {
         let n = 6 * model.end_effectors.len();
         let radius = m.bounding_radius();
         let (mut worst, mut largest_angle, mut norm_err) = (0.0_f64, 0.0_f64, 0.0_f64);
-        for scale in [1e-9, 1e-4, 1e-2, 0.3, 3.0] {
+        for scale in [1e-9, 1e-4, 1e-2, 0.3, 3.0, 30.0] {
             for moving in [false, true] {
                 // Displacements in the model's range: ξ = C w for a random wrench.
                 let w: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
@@ -111,8 +112,10 @@ fn kernel_equals_pose_exp_of_twist_maps() {
                     let t = link_twist(&model, k, &wk);
                     largest_angle = largest_angle.max(t.w.length());
                     let want = frame * (model.internal_reference[k] * Pose::exp(&t));
-                    let dq = (got.rotation - want.rotation).length();
-                    let dp = (got.translation - want.translation).length() / radius;
+                    let turns = t.w.length().max(1.0);
+                    let dq = (got.rotation - want.rotation).length() / turns;
+                    let dp = (got.translation - want.translation).length()
+                        / (radius.max(want.translation.length()) * turns);
                     worst = worst.max(dq).max(dp);
                     if !moving {
                         norm_err = norm_err.max((got.rotation.length() - 1.0).abs());
