@@ -8,7 +8,7 @@
 //! H_l` with `Ad_{R_l} = diag(R_l, R_l)`), so a step is one 6 × 6|E| product per link, the
 //! exponential's coefficients, and a quaternion product with the fixed reference rotation.
 //! Links are stored structure-of-arrays, [`LANES`] links side by side, and their arithmetic
-//! runs on AVX vectors where the processor has them ([`crate::lanes`], chosen at run time).
+//! runs on AVX vectors where the processor has them (module `lanes`, chosen at run time).
 //! The exponential's coefficients are Taylor series in θ² up to [`EXP_POLY_ANGLE`] (no square
 //! root, division or trigonometry), and above it vectorised trigonometry of the half angle
 //! (reduction by multiples of π/2, series on `[−π/4, π/4]`) up to [`EXP_REDUCED_ANGLE`]; libm
