@@ -1,6 +1,7 @@
 //! FORK⁻¹S step cost (Table 1): end-effector step plus every internal link's pose, on 1 and 2
 //! threads, for the bundled helix, ladder and robot arm; and the blended step (Table 2) with
-//! 1, 2 and 4 models on the helix-200.
+//! 1, 2 and 4 models on the helix-200. `helix-400 previous/N=…` times the internal-link
+//! update as it was before the batched kernel, in the same run as the current one.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
@@ -8,6 +9,9 @@ use impulse_geom::Pose;
 use impulse_reduced::blend::BlendedModel;
 use impulse_reduced::reference::{Configuration, Load, StaticOptions, solve_statics};
 use impulse_reduced::{ConstructOptions, ReducedModel, ReducedSim, scenes};
+
+#[path = "common/previous.rs"]
+mod previous;
 
 fn single(c: &mut Criterion) {
     let cases = [
@@ -48,6 +52,25 @@ fn single(c: &mut Criterion) {
                     })
                 });
             });
+            if name == "helix-400" {
+                c.bench_function(&format!("{name} previous/N={threads}"), |b| {
+                    b.iter_custom(|iters| {
+                        pool.install(|| {
+                            let t = std::time::Instant::now();
+                            for _ in 0..iters {
+                                s.step();
+                                previous::update_internal_links(
+                                    &s.model,
+                                    &s.xi,
+                                    &Pose::IDENTITY,
+                                    &mut out,
+                                );
+                            }
+                            t.elapsed()
+                        })
+                    });
+                });
+            }
         }
     }
 }

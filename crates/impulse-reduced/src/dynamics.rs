@@ -27,6 +27,7 @@ use impulse_geom::{Mat6, Pose, SpatialInertia, Twist, Wrench};
 
 use crate::construct::ReducedModel;
 use crate::error::Error;
+use crate::internal::InternalLinks;
 use crate::linalg::{Tsvd, pinv};
 use crate::mechanism::{Mechanism, Shape};
 use crate::obstacle::Obstacle;
@@ -125,7 +126,8 @@ struct Contact {
 
 /// A running reduced simulation of one model.
 pub struct ReducedSim {
-    /// The model.
+    /// The model. The factored system matrix and the internal links' kernel are derived from
+    /// it in [`ReducedSim::new`]: edit a model before making a simulation of it, not after.
     pub model: ReducedModel,
     /// Time step (s).
     pub h: f64,
@@ -151,6 +153,8 @@ pub struct ReducedSim {
     /// Rest pose of the base and its inverse inertia (free base).
     base_rest: Pose,
     base_mass_inv: Mat6,
+    /// The internal links' per-step kernel, built once like `a_inv`.
+    links: InternalLinks,
 }
 
 impl ReducedSim {
@@ -207,6 +211,7 @@ impl ReducedSim {
                 .collect(),
             base_rest: model.base_pose,
             base_mass_inv,
+            links: InternalLinks::new(&model),
             model,
         })
     }
@@ -232,7 +237,7 @@ impl ReducedSim {
         let frame = self
             .base
             .map_or(Pose::IDENTITY, |b| b.pose * self.base_rest.inverse());
-        crate::internal::update_internal_links(&self.model, &self.xi, &frame, out);
+        self.links.update(&self.xi, &frame, out);
     }
 
     /// Per-step error estimate: the relative constraint error (§8.2) of the reconstructed

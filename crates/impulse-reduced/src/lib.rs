@@ -36,6 +36,7 @@ mod desc;
 pub mod dynamics;
 mod error;
 pub mod internal;
+mod lanes;
 pub mod linalg;
 mod mechanism;
 pub mod obstacle;
