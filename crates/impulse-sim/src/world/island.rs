@@ -374,7 +374,10 @@ impl World {
         // it as long as its fastest-turning pair allows (the warm start is each pair's last
         // impulses scaled to that step), solve, hold.
         let mut touched: Vec<u32> = Vec::new();
-        for island in self.islands() {
+        // Stepping changes no island's pairs (only impulses and sleep), so the islands found
+        // here also schedule the next step.
+        let islands = self.islands();
+        for island in &islands {
             if island.bodies.iter().all(|&i| self.b(i).asleep)
                 || !island.bodies.iter().any(|&i| is_due(self, i))
             {
@@ -403,7 +406,7 @@ impl World {
                     }
                 }
             }
-            let h = self.step_island(&island, h0)?;
+            let h = self.step_island(island, h0)?;
             for p in &island.pairs {
                 if let Some(held) = self.islands.held.get_mut(p) {
                     held.span = h;
@@ -414,11 +417,11 @@ impl World {
             }
             touched.extend(&island.bodies);
             self.counters.island_steps += 1;
-            self.sleep_if_still(&island);
+            self.sleep_if_still(island);
         }
         // The next island step: the earliest due body of an awake island.
         self.islands.next_step = f64::INFINITY;
-        for island in self.islands() {
+        for island in &islands {
             for &i in &island.bodies {
                 if !self.b(i).asleep {
                     let due = self.islands.due.get(&i).copied().unwrap_or(t);
@@ -509,7 +512,8 @@ impl World {
         // face have one more gap than a plane has parameters; a warp between them (rounding,
         // a step's drift) asked of the points one by one is a target no motion meets, and the
         // solver answers it with huge opposite impulses on redundant corners.
-        let gaps = patch_plane_gaps(&contacts, &origin, &gaps);
+        let patches = patch_ranges(&origin);
+        let gaps = patch_plane_gaps(&contacts, &patches, &gaps);
         // Transients: a held contact approaching (faster than STRUCK_FRACTION·v_s) gets an
         // impulsive solve of its island first (e = 0 between held contacts): the island reacts
         // to a strike at once, through its constraints, not over a step.
@@ -555,14 +559,8 @@ impl World {
             // the step and sticking at its end.
             let slip_tol = SLIP_FRACTION * v_micro;
             let mut s = 1.0_f64;
-            let mut k = 0;
-            while k < contacts.len() {
-                let patch = (origin[k].0, origin[k].1);
-                let mut end = k;
-                while end < contacts.len() && (origin[end].0, origin[end].1) == patch {
-                    end += 1;
-                }
-                let (c0, c) = (&contacts[k..end], &solved.1[k..end]);
+            for range in &patches {
+                let (c0, c) = (&contacts[range.clone()], &solved.1[range.clone()]);
                 let slipping = c0
                     .iter()
                     .any(|c| tangential_speed(&after_jolt, c) > slip_tol);
@@ -574,7 +572,6 @@ impl World {
                 if slipping && sticks && cone > 0.0 {
                     s = s.min(total.truncate().length() / cone);
                 }
-                k = end;
             }
             // Cut again while a patch still sticks inside its cone (several points share
             // a patch's load unevenly, so one cut may stop short).
@@ -687,26 +684,35 @@ pub(super) fn rotation_speed(a: &crate::body::Body, b: &crate::body::Body) -> f6
 /// single point) when fitting a plane to its gaps. Default `1e-6`.
 const PATCH_FIT_DEGENERATE: f64 = 1e-6;
 
+/// The index ranges of an island's patches: the contacts of one manifold (pair and manifold
+/// index of `origin`), which are consecutive.
+fn patch_ranges(origin: &[((u32, u32), usize, usize)]) -> Vec<std::ops::Range<usize>> {
+    let mut ranges = Vec::new();
+    let mut k = 0;
+    while k < origin.len() {
+        let patch = (origin[k].0, origin[k].1);
+        let mut end = k;
+        while end < origin.len() && (origin[end].0, origin[end].1) == patch {
+            end += 1;
+        }
+        ranges.push(k..end);
+        k = end;
+    }
+    ranges
+}
+
 /// Each contact's gap replaced by the value at its point of the plane (a line for collinear
-/// points, the mean for one point) fitted by least squares to the gaps of its patch (the
-/// contacts of one manifold, consecutive in `origin`).
+/// points, the mean for one point) fitted by least squares to the gaps of its patch.
 fn patch_plane_gaps(
     contacts: &[Contact],
-    origin: &[((u32, u32), usize, usize)],
+    patches: &[std::ops::Range<usize>],
     gaps: &[f64],
 ) -> Vec<f64> {
     let mut out = gaps.to_vec();
-    let mut k = 0;
-    while k < contacts.len() {
-        let patch = (origin[k].0, origin[k].1);
-        let mut end = k;
-        while end < contacts.len() && (origin[end].0, origin[end].1) == patch {
-            end += 1;
-        }
-        let points: Vec<DVec3> = contacts[k..end].iter().map(|c| c.point).collect();
-        let fit = fit_plane(&points, contacts[k].normal, &gaps[k..end]);
-        out[k..end].copy_from_slice(&fit);
-        k = end;
+    for range in patches {
+        let points: Vec<DVec3> = contacts[range.clone()].iter().map(|c| c.point).collect();
+        let fit = fit_plane(&points, contacts[range.start].normal, &gaps[range.clone()]);
+        out[range.clone()].copy_from_slice(&fit);
     }
     out
 }

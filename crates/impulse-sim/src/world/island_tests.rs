@@ -299,19 +299,26 @@ fn stacks_stand_and_sleep() {
             let top = world.handle(&format!("block{}", n - 1)).expect("named");
             let start = world.state(top).expect("live").position;
             world.step_until(10.0).expect("runs");
-            let end = world.state(top).expect("live").position;
-            let drift = (end - start).truncate().length();
-            let depth = world.checked_penetration().expect("checking").max_depth;
-            assert!(drift <= eps, "n {n} offset {offset}: drift {drift}");
-            assert!(depth <= eps, "n {n} offset {offset}: penetration {depth}");
-            assert!(
-                world
-                    .bodies()
-                    .all(|(_, b)| !b.is_dynamic() || b.is_asleep()),
-                "n {n} offset {offset}: awake after 10 s"
-            );
+            assert_stood_asleep(&world, top, start, eps, &format!("n {n} offset {offset}"));
         }
     }
+}
+
+/// A stack stood and sleeps: its top block drifted sideways by at most ε_c from `start`, the
+/// independent monitor saw no penetration deeper than ε_c, and every dynamic body sleeps.
+fn assert_stood_asleep(world: &World, top: BodyHandle, start: DVec3, eps: f64, what: &str) {
+    let end = world.state(top).expect("live").position;
+    let drift = (end - start).truncate().length();
+    let depth = world.checked_penetration().expect("checking").max_depth;
+    assert!(drift <= eps, "{what}: drift {drift}");
+    assert!(depth <= eps, "{what}: penetration {depth}");
+    assert!(
+        world
+            .bodies()
+            .all(|(_, b)| !b.is_dynamic() || b.is_asleep()),
+        "{what}: awake after {} s",
+        world.time()
+    );
 }
 
 /// Sixteen flat blocks (10 × 7.5 × 5 cm) released half an ε_c apart, as the peer bench places
@@ -352,18 +359,7 @@ fn a_dropped_stack_of_sixteen_settles_and_sleeps() {
     for k in 1..=8 {
         world.step_until(0.25 * f64::from(k)).expect("runs");
     }
-    let drift = (world.state(top).expect("live").position - start)
-        .truncate()
-        .length();
-    let depth = world.checked_penetration().expect("checking").max_depth;
-    assert!(drift <= eps, "drift {drift}");
-    assert!(depth <= eps, "penetration {depth}");
-    assert!(
-        world
-            .bodies()
-            .all(|(_, b)| !b.is_dynamic() || b.is_asleep()),
-        "awake after 2 s"
-    );
+    assert_stood_asleep(&world, top, start, eps, "dropped stack of 16");
 }
 
 /// Total linear momentum of the dynamic bodies.
