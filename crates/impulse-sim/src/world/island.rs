@@ -125,6 +125,17 @@ impl World {
         }
     }
 
+    /// The end-of-step normal speed a held contact of gap `gap` is asked for (module
+    /// documentation of [`crate::sustained`]): β·(g_r − gap)/h toward the rest gap, and on top
+    /// the rest of an overlap (gap < 0) within the nominal step h. Turning within a step
+    /// drives a sliding, turning contact (a domino's edge on its neighbour's face) inward by
+    /// about ½·ω²·r·h² a step, which the rate β alone would let settle β⁻¹ times deeper.
+    fn stabilisation_speed(&self, gap: f64) -> f64 {
+        let s = &self.islands.settings;
+        let rest_gap = s.rest_gap_fraction * self.collision_epsilon();
+        (s.stabilisation * (rest_gap - gap) + (1.0 - s.stabilisation) * (-gap).max(0.0)) / s.step
+    }
+
     pub(super) fn is_held(&self, pair: (u32, u32)) -> bool {
         self.islands.held.contains_key(&pair)
     }
@@ -442,10 +453,8 @@ impl World {
     /// contact loads, and returns the step's length (shortened to a slip → stick transition).
     fn step_island(&mut self, island: &Island, h0: f64) -> Result<f64, SimError> {
         let settings = self.islands.settings;
-        let eps = self.collision_epsilon();
         let v_micro = self.micro_speed();
         let v_s = self.switch_speed();
-        let rest_gap = settings.rest_gap_fraction * eps;
         let solver = SolverSettings {
             max_iterations: settings.max_sweeps,
             tolerance: (settings.solver_tolerance_factor * v_micro).max(f64::MIN_POSITIVE),
@@ -525,8 +534,7 @@ impl World {
             let mut jolt = contacts.clone();
             for (c, &gap) in jolt.iter_mut().zip(&gaps) {
                 c.impulse = DVec3::ZERO;
-                c.target_normal_velocity =
-                    (settings.stabilisation * (rest_gap - gap) / settings.step).max(0.0);
+                c.target_normal_velocity = self.stabilisation_speed(gap).max(0.0);
             }
             self.solve(&mut bodies, &mut jolt, &solver)?;
             self.counters.transients += 1;
@@ -544,8 +552,7 @@ impl World {
             // The stabilisation's rate is that of the nominal step: a step cut short by a
             // transition must not push harder.
             for (c, &gap) in contacts.iter_mut().zip(&gaps) {
-                c.target_normal_velocity =
-                    settings.stabilisation * (rest_gap - gap) / settings.step;
+                c.target_normal_velocity = self.stabilisation_speed(gap);
             }
             let mut trial = contacts.clone();
             self.solve(&mut bodies, &mut trial, &solver)?;
