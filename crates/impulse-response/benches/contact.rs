@@ -3,6 +3,7 @@
 //! of gravity (h = 1 ms) and solves warm-started from the previous step's impulses, as an
 //! island at rest would be stepped. Criterion's throughput column gives contacts per second;
 //! the sweeps a step needs are printed once per size (to the default tolerance 1e-9 m/s).
+//! A second group times the first step of each stack from a cold start (the direct solve).
 //! Run: `cargo bench -p impulse-response --bench contact`.
 //!
 //! What it showed (2026-12-02, release, loaded 2-core machine): 4.7 / 8.3 / 86 µs per step
@@ -79,5 +80,26 @@ fn bench_stacks(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_stacks);
+/// The first step of a stack at rest from a cold start (no warm start): Gauss–Seidel cannot
+/// carry the loads down a tall stack within its sweeps, so this times the direct solve
+/// (`impulse_response::contact::DENSE_UP_TO`: dense LU for small systems, sparse beyond). Each
+/// iteration solves a fresh copy.
+fn bench_cold(c: &mut Criterion) {
+    let settings = SolverSettings::default();
+    let mut group = c.benchmark_group("contact_stack_cold");
+    group.sample_size(10);
+    for n in [8usize, 16, 32, 64] {
+        let fresh = stack(n);
+        group.throughput(Throughput::Elements(fresh.1.len() as u64));
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                let (mut bodies, mut contacts) = fresh.clone();
+                black_box(step(&mut bodies, &mut contacts, &settings))
+            });
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_stacks, bench_cold);
 criterion_main!(benches);

@@ -23,7 +23,10 @@
 //! - **Position stabilisation**: a held contact rests at the gap g_r = `rest_gap_fraction`·ε_c
 //!   inside the contact envelope [0, ε_c]; each step asks for the end-of-step normal speed
 //!   u_n ≥ β·(g_r − gap)/h (β = [`SustainedSettings::stabilisation`]), which pushes an overlap
-//!   back and lets a gap close, without the velocity ringing of a trapezoidal target. The
+//!   back and lets a gap close, without the velocity ringing of a trapezoidal target; an
+//!   overlap (gap < 0) is asked back in full within h on top of that (a contact sliding on a
+//!   turning body is driven inward by about ½·ω²·r·h² a step, which β alone lets settle
+//!   β⁻¹ times deeper). The
 //!   energy this can add is bounded: it lifts a body by at most g_r per contact beneath it
 //!   (Σ m·|g|·N·g_r for N bodies) and pushes at most at β·g_r/h (½·m·(β·g_r/h)² each).
 //! - **Transitions in time**: when a contact that was slipping at the start of a step sticks

@@ -51,7 +51,7 @@ mod direct;
 #[cfg(test)]
 mod tests;
 
-pub use direct::{LAW_SLACK, MAX_ROUNDS, REGULARISATION};
+pub use direct::{DENSE_UP_TO, LAW_SLACK, MAX_ROUNDS, REGULARISATION};
 
 /// One body of an island, as the solver sees it: mass properties, centre of mass and velocity,
 /// all in world axes. The solver changes `velocity` and `omega` in place.
