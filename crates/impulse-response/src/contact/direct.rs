@@ -10,13 +10,16 @@
 //!   equation u_n = u_target;
 //! - a contact that does not press has neither.
 //!
-//! With u = u_now + W·ΔP (W the island's Delassus matrix, built here column by column from
-//! the bodies' mass properties, only between contacts that share a body), this is one square
-//! linear system, solved by LU with a tiny Tikhonov term ([`REGULARISATION`]) because an
-//! interface of four corners has more contact rows than the six relative degrees of freedom
-//! of two bodies (the redundant rows make W singular). The result is checked against the
-//! laws (p_n ≥ 0, ‖p_t‖ ≤ μ p_n, u_n ≥ u_target where nothing presses); a contact that
-//! breaks one changes class and the system is solved again, up to [`MAX_ROUNDS`] times. The
+//! A class also forces part of the change: a contact that does not press drops the impulse
+//! it had, a sliding one has its friction put on the rim in its direction. With u = u_now +
+//! W·(F + ΔP) (W the island's Delassus matrix, built here column by column from the bodies'
+//! mass properties, only between contacts that share a body; F the forced changes, ΔP the
+//! unknowns), this is one square linear system, solved by LU with a tiny Tikhonov term
+//! ([`REGULARISATION`]) because an interface of four corners has more contact rows than the
+//! six relative degrees of freedom of two bodies (the redundant rows make W singular). The
+//! result is checked against the laws (p_n ≥ 0, ‖p_t‖ ≤ μ p_n, u_n ≥ u_target where nothing
+//! presses); a contact that breaks one changes class and the system is solved again, up to
+//! [`MAX_ROUNDS`] times, or until a set of classes comes back (a cycle). The
 //! caller keeps sweeping afterwards, so the laws are Gauss–Seidel's to enforce in the end;
 //! the direct solve only brings the iterate next to the solution in one stroke.
 //!
@@ -138,12 +141,31 @@ fn solve_from(
         .zip(rows)
         .map(|(c, r)| contact_velocity(bodies, c, r))
         .collect();
+    // The contacts each contact's impulse reaches (those sharing a body with it), ascending.
+    let near: Vec<Vec<usize>> = contacts
+        .iter()
+        .map(|c| {
+            let mut near: Vec<usize> = by_body[c.body1].clone();
+            if let Some(b) = c.body2 {
+                near.extend(&by_body[b]);
+            }
+            near.sort_unstable();
+            near.dedup();
+            near
+        })
+        .collect();
     let p_max = contacts
         .iter()
         .map(|c| c.impulse.z)
         .fold(0.0_f64, f64::max)
         .max(f64::MIN_POSITIVE);
+    // The active sets tried so far: one seen again is a cycle, which more rounds only repeat.
+    let mut tried: Vec<Vec<Class>> = Vec::new();
     for _ in 0..MAX_ROUNDS {
+        if tried.contains(&class) {
+            return false;
+        }
+        tried.push(class.clone());
         let mut offset = vec![usize::MAX; n];
         let mut m = 0;
         for k in 0..n {
@@ -154,6 +176,28 @@ fn solve_from(
         }
         if m == 0 {
             return false;
+        }
+        // What the classes force before any unknown: a contact that does not press drops its
+        // impulse, a sliding one puts its friction on the cone's rim in its direction. The
+        // linear system starts from the velocities after those changes (else the velocities
+        // it solves for are not the ones the impulses it returns produce).
+        let mut u_base = u_now.clone();
+        for j in 0..n {
+            let p = contacts[j].impulse;
+            let forced = match class[j] {
+                Class::Off => -p,
+                Class::Stick => DVec3::ZERO,
+                Class::Slide(d) => {
+                    let rim = contacts[j].friction * p.z;
+                    DVec3::new(rim * d.x - p.x, rim * d.y - p.y, 0.0)
+                }
+            };
+            if forced != DVec3::ZERO {
+                let world = rows[j].frame.to_world(forced);
+                for &i in &near[j] {
+                    u_base[i] += response(bodies, contacts, rows, i, j, world);
+                }
+            }
         }
         // W on the active set, column by column (compressed sparse columns, rows ascending).
         let mut a = Columns::default();
@@ -171,17 +215,11 @@ fn solve_from(
                     vec![DVec3::new(mu * d.x, mu * d.y, 1.0)]
                 }
             };
-            let mut near: Vec<usize> = by_body[contacts[j].body1].clone();
-            if let Some(b) = contacts[j].body2 {
-                near.extend(&by_body[b]);
-            }
-            near.sort_unstable();
-            near.dedup();
             for (q, dir) in dirs.iter().enumerate() {
                 let col = offset[j] + q;
                 let p = rows[j].frame.to_world(*dir);
                 // `near` is ascending, and so are the offsets: the rows come in order.
-                for &i in &near {
+                for &i in &near[j] {
                     let du = response(bodies, contacts, rows, i, j, p);
                     entries.push((i, col, du));
                     match class[i] {
@@ -202,11 +240,11 @@ fn solve_from(
             match class[k] {
                 Class::Off => {}
                 Class::Stick => {
-                    rhs[(offset[k], 0)] = -u_now[k].x;
-                    rhs[(offset[k] + 1, 0)] = -u_now[k].y;
-                    rhs[(offset[k] + 2, 0)] = target - u_now[k].z;
+                    rhs[(offset[k], 0)] = -u_base[k].x;
+                    rhs[(offset[k] + 1, 0)] = -u_base[k].y;
+                    rhs[(offset[k] + 2, 0)] = target - u_base[k].z;
                 }
-                Class::Slide(_) => rhs[(offset[k], 0)] = target - u_now[k].z,
+                Class::Slide(_) => rhs[(offset[k], 0)] = target - u_base[k].z,
             }
         }
         // Tikhonov on the *total* impulse, not on its change: min ‖W·ΔP − b‖ + λ‖P + ΔP‖ gives
@@ -259,7 +297,7 @@ fn solve_from(
                 }
             })
             .collect();
-        let mut u_after = u_now.clone();
+        let mut u_after = u_base;
         for &(i, col, du) in &entries {
             u_after[i] += du * x[(col, 0)];
         }
