@@ -8,9 +8,10 @@
 //! - **Table 2**: µs per blended step (Algorithm 5: weights, Algorithm 3 on three matrices,
 //!   eq. 28, the step, Algorithm 4) with 1, 2 and 4 models, next to the paper's.
 //! - **Fig. 7**: relative constraint error against relative end-effector displacement, single
-//!   and blended, for the "Y" and the ladder, against the full nonlinear statics; written as
+//!   and blended, for the "Y" and the ladder, each curve against its own end effector's
+//!   displacement (as in the paper), with each curve read at displacement 1; written as
 //!   `fig7-<name>.csv` and `fig7-<name>.svg`. The same rows give reduced-vs-full end-effector
-//!   pose error at equal loads.
+//!   pose error at equal loads (the full solution's displacement is a column too).
 //!
 //! Output directory: `--out DIR` (default `target/bench`).
 
@@ -24,7 +25,7 @@ use impulse_reduced::blend::BlendedModel;
 use impulse_reduced::reference::{
     Configuration, FullOptions, FullSim, Load, StaticOptions, solve_statics,
 };
-use impulse_reduced::study::{Fig7Row, fig7};
+use impulse_reduced::study::{Fig7Row, curve_at, fig7};
 use impulse_reduced::{ConstructOptions, MassModel, Mechanism, ReducedModel, ReducedSim, scenes};
 
 use crate::Result;
@@ -324,18 +325,20 @@ pub fn run(out: &Path) -> Result<()> {
         (
             "y",
             mechanism("y")?,
+            // To 720 N, where the single model's own displacement passes 1.
             DVec3::X,
-            (1..=16).map(|k| 40.0 * k as f64).collect(),
+            (1..=18).map(|k| 40.0 * k as f64).collect(),
             vec![160.0, 320.0, 480.0, 640.0],
             impulse_reduced::tol::STATIC_RESIDUAL_REL,
         ),
         (
             "ladder-36",
             mechanism("ladder-36")?,
-            // Out of the ladder's plane: in its plane the rung hinges lock every level.
+            // Out of the ladder's plane: in its plane the rung hinges lock every level. To
+            // 160 N, where the single model's own displacement passes 1.
             DVec3::Y,
-            (1..=12).map(|k| 10.0 * k as f64).collect(),
-            vec![30.0, 60.0, 90.0, 120.0],
+            (1..=16).map(|k| 10.0 * k as f64).collect(),
+            vec![40.0, 80.0, 120.0, 160.0],
             LADDER_STATIC_TOLERANCE,
         ),
     ];
@@ -355,20 +358,47 @@ pub fn run(out: &Path) -> Result<()> {
             &statics,
         )
         .map_err(err(name))?;
-        println!("{name}: load N, displacement, single, blended, EE pose error single, blended");
-        let mut csv =
-            String::from("load,displacement,single,blended,single_pose_error,blended_pose_error\n");
+        println!(
+            "{name}: load N, displacement (full, single, blended), error (single, blended), EE pose error (single, blended)"
+        );
+        let mut csv = String::from(
+            "load,displacement,single_displacement,blended_displacement,single,blended,single_pose_error,blended_pose_error\n",
+        );
         for r in &rows {
             println!(
-                "  {:7.1} {:7.3} {:10.3e} {:10.3e} {:10.3e} {:10.3e}",
-                r.load, r.displacement, r.single, r.blended, r.single_pose, r.blended_pose
+                "  {:7.1} {:7.3} {:7.3} {:7.3} {:10.3e} {:10.3e} {:10.3e} {:10.3e}",
+                r.load,
+                r.displacement,
+                r.single_displacement,
+                r.blended_displacement,
+                r.single,
+                r.blended,
+                r.single_pose,
+                r.blended_pose
             );
             let _ = writeln!(
                 csv,
-                "{},{},{},{},{},{}",
-                r.load, r.displacement, r.single, r.blended, r.single_pose, r.blended_pose
+                "{},{},{},{},{},{},{},{}",
+                r.load,
+                r.displacement,
+                r.single_displacement,
+                r.blended_displacement,
+                r.single,
+                r.blended,
+                r.single_pose,
+                r.blended_pose
             );
         }
+        let read = |d: fn(&Fig7Row) -> f64, e: fn(&Fig7Row) -> f64| {
+            curve_at(&rows, d, e, 1.0)
+                .map_or_else(|| "not reached".to_owned(), |x| format!("{x:.3}"))
+        };
+        println!(
+            "  at relative displacement 1 (paper: single 0.1–0.15): single {}, blended {}; single at the full model's displacement 1 (the old abscissa) {}",
+            read(|r| r.single_displacement, |r| r.single),
+            read(|r| r.blended_displacement, |r| r.blended),
+            read(|r| r.displacement, |r| r.single)
+        );
         let mean = |f: fn(&Fig7Row) -> f64| rows.iter().map(f).sum::<f64>() / rows.len() as f64;
         println!(
             "  mean constraint error: single {:.3e}, blended {:.3e} (ratio {:.2}); samples at {samples:?} N",
@@ -396,7 +426,7 @@ fn plot(name: &str, rows: &[Fig7Row]) -> String {
     let (w, h, m) = (560.0, 360.0, 50.0);
     let xmax = rows
         .iter()
-        .map(|r| r.displacement)
+        .map(|r| r.single_displacement.max(r.blended_displacement))
         .fold(0.0, f64::max)
         .max(1e-9);
     let ymax = rows
@@ -406,10 +436,11 @@ fn plot(name: &str, rows: &[Fig7Row]) -> String {
         .max(1e-12);
     let px = |x: f64| m + (w - 2.0 * m) * x / xmax;
     let py = |y: f64| h - m - (h - 2.0 * m) * y / ymax;
-    let line = |f: fn(&Fig7Row) -> f64, colour: &str| {
+    // Each curve against its own end effector's displacement.
+    let line = |x: fn(&Fig7Row) -> f64, f: fn(&Fig7Row) -> f64, colour: &str| {
         let pts: Vec<String> = rows
             .iter()
-            .map(|r| format!("{:.1},{:.1}", px(r.displacement), py(f(r))))
+            .map(|r| format!("{:.1},{:.1}", px(x(r)), py(f(r))))
             .collect();
         format!(
             "<polyline fill=\"none\" stroke=\"{colour}\" stroke-width=\"2\" points=\"{}\"/>\n",
@@ -422,8 +453,8 @@ fn plot(name: &str, rows: &[Fig7Row]) -> String {
         w - 2.0 * m,
         h - 2.0 * m
     );
-    s += &line(|r| r.single, "#c33");
-    s += &line(|r| r.blended, "#33c");
+    s += &line(|r| r.single_displacement, |r| r.single, "#c33");
+    s += &line(|r| r.blended_displacement, |r| r.blended, "#33c");
     let _ = write!(
         s,
         "<text x=\"{m}\" y=\"{}\">0</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{xmax:.2}</text>\n<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{ymax:.2e}</text>\n<text x=\"{}\" y=\"{}\" fill=\"#c33\">single model</text><text x=\"{}\" y=\"{}\" fill=\"#33c\">blended</text>\n</svg>\n",

@@ -439,8 +439,14 @@ impl BlendedModel {
 
 /// Static equilibrium of a blended model (fixed base) under constant stacked world loads
 /// `force_torque` (per end effector: force then torque, world): the fixed point
-/// `H_e = H̄_e exp(C̄ (w(H_e) − b̄))` of Algorithm 5 at rest, by successive substitution from
-/// `start`. Returns the end-effector poses and the weights there.
+/// `H_e = H̄_e exp(C̄ (w(H_e) − b̄))` of Algorithm 5 at rest, by relaxed successive substitution
+/// from `start`: each pass moves `H_e ← H_e exp(β log(H_e⁻¹ H_e'))` towards the substituted
+/// pose `H_e'`, with β = 1 until a pass lands where the residual `max_e ‖log(H_e⁻¹ H_e')‖` is
+/// larger than where it started; that pass is undone and β halved (down to
+/// [`tol::BLEND_STATIC_MIN_RELAXATION`], where passes are always taken). A world force turns
+/// with the end effector, so beyond a load of the order of the stiffness over the lever arm
+/// the plain substitution (β = 1) oscillates away (the single ladder model past ~140 N) or
+/// jumps to another equilibrium; the relaxation leaves the fixed points unchanged. Returns the end-effector poses and the weights there.
 ///
 /// # Errors
 /// [`Error::NoConvergence`] when the iteration does not settle; errors of [`BlendedModel::blend`].
@@ -450,7 +456,11 @@ pub fn blended_statics(
     start: &[Pose],
 ) -> Result<(Vec<Pose>, Vec<f64>), Error> {
     let mut ee = start.to_vec();
-    for it in 0..tol::BLEND_STATIC_ITERATIONS {
+    // The last accepted iterate and its residual, to step back to when a pass overshoots.
+    let mut kept = ee.clone();
+    let mut kept_residual = f64::INFINITY;
+    let mut relax = 1.0_f64;
+    for _ in 0..tol::BLEND_STATIC_ITERATIONS {
         let b = set.blend(&ee)?;
         let w: Vec<f64> = ee
             .iter()
@@ -462,30 +472,46 @@ pub fn blended_statics(
             })
             .collect();
         let n = w.len();
-        let mut change = 0.0_f64;
-        let next: Vec<Pose> = (0..ee.len())
+        // The substituted poses' offsets from the current ones; their size is the residual.
+        let targets: Vec<Twist> = (0..ee.len())
             .map(|e| {
                 let xi = Twist::from_array(core::array::from_fn(|r| {
                     (0..n)
                         .map(|c| b.compliance[(6 * e + r, c)] * (w[c] - b.bias[c]))
                         .sum()
                 }));
-                let p = b.reference[e] * Pose::exp(&xi);
-                change = change.max(scaled_norm(&(ee[e].inverse() * p).log(), set.radius));
-                p
+                (ee[e].inverse() * (b.reference[e] * Pose::exp(&xi))).log()
             })
             .collect();
-        ee = next;
-        if change <= tol::BLEND_STATIC_TOLERANCE {
+        let residual = targets
+            .iter()
+            .map(|t| scaled_norm(t, set.radius))
+            .fold(0.0, f64::max);
+        if residual <= tol::BLEND_STATIC_TOLERANCE {
             let alpha = set.weights(&ee);
             return Ok((ee, alpha));
         }
-        let _ = it;
+        if residual > kept_residual && relax > tol::BLEND_STATIC_MIN_RELAXATION {
+            // The pass overshot: back to the kept iterate with half the step.
+            relax = (0.5 * relax).max(tol::BLEND_STATIC_MIN_RELAXATION);
+            ee.clone_from(&kept);
+            continue;
+        }
+        kept.clone_from(&ee);
+        kept_residual = residual;
+        for (p, t) in ee.iter_mut().zip(&targets) {
+            *p = *p * Pose::exp(&scale(t, relax));
+        }
     }
     Err(Error::NoConvergence {
         residual: f64::NAN,
         iterations: tol::BLEND_STATIC_ITERATIONS,
     })
+}
+
+/// `β ξ`.
+fn scale(t: &Twist, beta: f64) -> Twist {
+    Twist::new(t.v * beta, t.w * beta)
 }
 
 #[cfg(test)]

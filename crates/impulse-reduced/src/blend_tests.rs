@@ -6,10 +6,14 @@ use glam::DVec3;
 use super::*;
 use crate::construct::ConstructOptions;
 use crate::study::fig7;
-use crate::testutil::{max_abs, rng};
+use crate::testutil::{lever, lever_angle, max_abs, rng};
 
 /// Interpolation at a sample point and blends of equal matrices are exact to rounding.
 const EXACT_REL: f64 = 1e-12;
+
+/// Agreement of the blended statics with the lever's closed form (scaled twist norm): the
+/// fixed point stops at `tol::BLEND_STATIC_TOLERANCE`.
+const LEVER_TOL: f64 = 1e-9;
 
 fn random_spd(rng: &mut rand::rngs::Xoshiro256PlusPlus, n: usize, rank: usize) -> Mat<f64> {
     use rand::RngExt;
@@ -201,4 +205,35 @@ fn blended_step_with_one_model_follows_the_single_model() {
     let rel = scaled_norm(&d, 1.0) / scaled_norm(&size, 1.0);
     println!("blended (1 model) vs single step after 200 steps: {rel:.2e} relative");
     assert!(rel < 1e-3);
+}
+
+#[test]
+fn blended_statics_follows_the_equilibrium_where_plain_substitution_diverges() {
+    // Loads k = c·L·F up to 3, each solve started from the last: θ* = 1.170 at k = 3. The
+    // plain substitution θ ← k cos θ has slope k sin θ* > 1 from k ≈ 1.4 on, so it oscillates
+    // away (or lands on the wound-back equilibrium near θ = −2.9); the relaxed iteration must
+    // stay on the branch through θ = 0.
+    let (c, length) = (1.0, 1.0);
+    let m = lever(c, length);
+    let model = ReducedModel::build(
+        &m,
+        &crate::reference::Configuration::rest(&m),
+        &[],
+        &ConstructOptions::default(),
+    )
+    .unwrap();
+    let rest = vec![m.links[m.end_effectors[0]].rest];
+    let set = BlendedModel::new(vec![model], rest.clone(), m.bounding_radius()).unwrap();
+    let mut start = rest.clone();
+    for step in 1..=12 {
+        let force = 0.25 * f64::from(step);
+        let (ee, _) = blended_statics(&set, &[[0.0, force, 0.0, 0.0, 0.0, 0.0]], &start)
+            .unwrap_or_else(|e| panic!("k = {force}: {e}"));
+        let theta = lever_angle(c * length * force);
+        let exact = Pose::exp(&Twist::new(DVec3::ZERO, DVec3::Z * theta)) * rest[0];
+        let err = scaled_norm(&(exact.inverse() * ee[0]).log(), 1.0);
+        println!("k = {force}: θ* = {theta:.12}, pose error {err:.2e}");
+        assert!(err < LEVER_TOL, "k = {force}: pose error {err:.2e}");
+        start = ee;
+    }
 }

@@ -353,3 +353,38 @@ pub fn hinge_rod(compliance: f64, damping: &[f64]) -> Mechanism {
         .end_effector("rod");
     d.build().unwrap()
 }
+
+/// A lever: a 1 kg link whose frame (and COM) sits `length` out along x from a hinge about z
+/// at the origin, hinge compliance `compliance`; no gravity. A world force `F` along y at the
+/// link's origin holds it at the angle θ with `θ = compliance · length · F · cos θ` — exactly,
+/// for the full model and for its one-hinge reduced model alike (the reduced twist is the
+/// hinge's own screw), which makes it a closed-form check of the Fig. 7 statics.
+pub fn lever(compliance: f64, length: f64) -> Mechanism {
+    let mut d = MechanismDesc::new("lever");
+    d.link(LinkDesc::new("base", [0.0; 3]))
+        .link(LinkDesc::new("arm", [length, 0.0, 0.0]).mass(1.0, [0.01; 3]))
+        .joint(
+            JointDesc::hinge("h", "base", "arm", [0.0; 3], [0.0, 0.0, 1.0])
+                .compliance(&[compliance]),
+        )
+        .end_effector("arm");
+    d.build().unwrap()
+}
+
+/// Root of `θ = k cos θ` in `[0, π/2]` by bisection (the lever's equilibrium angle under a
+/// constant world force, `k = c·L·F`), to [`BISECTION_TOL`].
+pub fn lever_angle(k: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0_f64, core::f64::consts::FRAC_PI_2);
+    while hi - lo > BISECTION_TOL {
+        let mid = 0.5 * (lo + hi);
+        if mid - k * mid.cos() > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Width (rad) at which [`lever_angle`]'s bisection stops.
+pub const BISECTION_TOL: f64 = 1e-15;
