@@ -33,7 +33,8 @@
 //! an island's loads change, not while it rests (its warm start is then already the solution).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::solvers::Solve;
+use faer::linalg::lu::partial_pivoting::factor::{lu_in_place, lu_in_place_scratch};
+use faer::linalg::lu::partial_pivoting::solve::{solve_in_place_scratch, solve_in_place_with_conj};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::lu::{LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -42,6 +43,7 @@ use glam::{DVec2, DVec3};
 use std::cell::RefCell;
 
 use super::{Contact, IslandBody, Row, apply, contact_velocity};
+use crate::body::Body;
 
 /// Tikhonov term of the direct solve, relative to W's largest diagonal entry: far below any
 /// physical compliance, far above the rounding that makes a redundant system's LU break
@@ -113,10 +115,49 @@ pub(super) fn solve_active_set(
             }
         })
         .collect();
+    let w = Couplings::new(bodies, contacts, rows);
     // Gauss–Seidel's classes first; failing those, every contact sticking (an island at
     // rest, whose iterate was too far from converged to tell).
-    solve_from(bodies, contacts, rows, tolerance, guess)
-        || solve_from(bodies, contacts, rows, tolerance, vec![Class::Stick; n])
+    solve_from(bodies, contacts, rows, &w, tolerance, guess)
+        || solve_from(bodies, contacts, rows, &w, tolerance, vec![Class::Stick; n])
+}
+
+/// Which contacts an impulse at a contact reaches, and how: W's non-zero blocks.
+struct Couplings {
+    /// For each contact j: every contact i sharing a moving body with it (ascending), with
+    /// i's velocity change (its frame) for a unit impulse along each axis of j's frame.
+    responses: Vec<Vec<(usize, [DVec3; 3])>>,
+}
+
+impl Couplings {
+    fn new(bodies: &[IslandBody], contacts: &[Contact], rows: &[Row]) -> Self {
+        // The contacts of each moving body (a fixed body passes no impulse on).
+        let mut by_body: Vec<Vec<usize>> = vec![Vec::new(); bodies.len()];
+        for (k, c) in contacts.iter().enumerate() {
+            for b in [Some(c.body1), c.body2].into_iter().flatten() {
+                if !matches!(bodies[b].body, Body::Fixed) {
+                    by_body[b].push(k);
+                }
+            }
+        }
+        let responses = contacts
+            .iter()
+            .enumerate()
+            .map(|(j, c)| {
+                let mut near: Vec<usize> = by_body[c.body1].clone();
+                if let Some(b) = c.body2 {
+                    near.extend(&by_body[b]);
+                }
+                near.sort_unstable();
+                near.dedup();
+                let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|d| rows[j].frame.to_world(d));
+                near.into_iter()
+                    .map(|i| (i, axes.map(|p| response(bodies, contacts, rows, i, j, p))))
+                    .collect()
+            })
+            .collect();
+        Self { responses }
+    }
 }
 
 /// [`solve_active_set`] from the classes `class`.
@@ -124,35 +165,16 @@ fn solve_from(
     bodies: &mut [IslandBody],
     contacts: &mut [Contact],
     rows: &[Row],
+    w: &Couplings,
     tolerance: f64,
     mut class: Vec<Class>,
 ) -> bool {
     let n = contacts.len();
-    // Contacts that share a body (the only non-zero blocks of W).
-    let mut by_body: Vec<Vec<usize>> = vec![Vec::new(); bodies.len()];
-    for (k, c) in contacts.iter().enumerate() {
-        by_body[c.body1].push(k);
-        if let Some(j) = c.body2 {
-            by_body[j].push(k);
-        }
-    }
+    let responses = &w.responses;
     let u_now: Vec<DVec3> = contacts
         .iter()
         .zip(rows)
         .map(|(c, r)| contact_velocity(bodies, c, r))
-        .collect();
-    // The contacts each contact's impulse reaches (those sharing a body with it), ascending.
-    let near: Vec<Vec<usize>> = contacts
-        .iter()
-        .map(|c| {
-            let mut near: Vec<usize> = by_body[c.body1].clone();
-            if let Some(b) = c.body2 {
-                near.extend(&by_body[b]);
-            }
-            near.sort_unstable();
-            near.dedup();
-            near
-        })
         .collect();
     let p_max = contacts
         .iter()
@@ -193,9 +215,8 @@ fn solve_from(
                 }
             };
             if forced != DVec3::ZERO {
-                let world = rows[j].frame.to_world(forced);
-                for &i in &near[j] {
-                    u_base[i] += response(bodies, contacts, rows, i, j, world);
+                for &(i, unit) in &responses[j] {
+                    u_base[i] += along(&unit, forced);
                 }
             }
         }
@@ -217,10 +238,9 @@ fn solve_from(
             };
             for (q, dir) in dirs.iter().enumerate() {
                 let col = offset[j] + q;
-                let p = rows[j].frame.to_world(*dir);
                 // `near` is ascending, and so are the offsets: the rows come in order.
-                for &i in &near[j] {
-                    let du = response(bodies, contacts, rows, i, j, p);
+                for &(i, unit) in &responses[j] {
+                    let du = along(&unit, *dir);
                     entries.push((i, col, du));
                     match class[i] {
                         Class::Stick => {
@@ -467,6 +487,45 @@ fn symbolic_lu(a: &Columns, sparse: &SparseColMat<usize, f64>) -> Option<Symboli
     })
 }
 
+/// The response to the impulse `p` (contact frame) from the responses to the frame's unit
+/// impulses: W is linear.
+fn along(unit: &[DVec3; 3], p: DVec3) -> DVec3 {
+    unit[0] * p.x + unit[1] * p.y + unit[2] * p.z
+}
+
+/// Solves A·x = rhs by a dense LU with partial pivoting, sequentially: faer's convenience
+/// solver takes the global parallelism, and for the small systems of an island's direct solve
+/// its thread hand-offs cost more than the factorisation (measured: 40 % of the dominos' run
+/// in the kernel's scheduler).
+fn dense_solve(mut lu: Mat<f64>, mut rhs: Mat<f64>) -> Mat<f64> {
+    let m = lu.nrows();
+    let par = Par::Seq;
+    let (mut forward, mut inverse) = (vec![0usize; m], vec![0usize; m]);
+    let mut scratch = MemBuffer::new(
+        lu_in_place_scratch::<usize, f64>(m, m, par, Default::default())
+            .or(solve_in_place_scratch::<usize, f64>(m, 1, par)),
+    );
+    let (_, perm) = lu_in_place(
+        lu.as_mut(),
+        &mut forward,
+        &mut inverse,
+        par,
+        MemStack::new(&mut scratch),
+        Default::default(),
+    );
+    // The triangular solves read only their own triangle of the packed factors.
+    solve_in_place_with_conj(
+        lu.as_ref(),
+        lu.as_ref(),
+        perm,
+        Conj::No,
+        rhs.as_mut(),
+        par,
+        MemStack::new(&mut scratch),
+    );
+    rhs
+}
+
 /// Solves A·x = rhs for the m × m matrix `a`: dense LU up to [`DENSE_UP_TO`] unknowns,
 /// sparse supernodal LU beyond, sequentially (the result must not depend on the thread
 /// count). `None` when the sparse factorisation fails (a structurally singular system).
@@ -481,7 +540,7 @@ fn solve_linear(m: usize, a: &Columns, mut rhs: Mat<f64>) -> Option<Mat<f64>> {
                 dense[(a.rows[k], c)] = a.values[k];
             }
         }
-        return Some(dense.partial_piv_lu().solve(&rhs));
+        return Some(dense_solve(dense, rhs));
     }
     let pattern =
         SymbolicSparseColMat::<usize>::new_checked(m, m, a.starts.clone(), None, a.rows.clone());
