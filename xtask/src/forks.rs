@@ -365,8 +365,16 @@ pub fn run(out: &Path) -> Result<()> {
             "load,displacement,single_displacement,blended_displacement,single,blended,single_pose_error,blended_pose_error\n",
         );
         for r in &rows {
-            println!(
-                "  {:7.1} {:7.3} {:7.3} {:7.3} {:10.3e} {:10.3e} {:10.3e} {:10.3e}",
+            let [
+                load,
+                full,
+                single_d,
+                blended_d,
+                single,
+                blended,
+                single_pose,
+                blended_pose,
+            ] = [
                 r.load,
                 r.displacement,
                 r.single_displacement,
@@ -374,19 +382,14 @@ pub fn run(out: &Path) -> Result<()> {
                 r.single,
                 r.blended,
                 r.single_pose,
-                r.blended_pose
+                r.blended_pose,
+            ];
+            println!(
+                "  {load:7.1} {full:7.3} {single_d:7.3} {blended_d:7.3} {single:10.3e} {blended:10.3e} {single_pose:10.3e} {blended_pose:10.3e}"
             );
             let _ = writeln!(
                 csv,
-                "{},{},{},{},{},{},{},{}",
-                r.load,
-                r.displacement,
-                r.single_displacement,
-                r.blended_displacement,
-                r.single,
-                r.blended,
-                r.single_pose,
-                r.blended_pose
+                "{load},{full},{single_d},{blended_d},{single},{blended},{single_pose},{blended_pose}"
             );
         }
         let read = |d: fn(&Fig7Row) -> f64, e: fn(&Fig7Row) -> f64| {
