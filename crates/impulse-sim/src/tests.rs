@@ -322,3 +322,29 @@ fn ball_in_a_corner_rests_within_the_envelope() {
     }
     assert!(n > 50, "{n} contacts with the fixed ball");
 }
+
+/// A dynamic body left at the default density beside one given its mass is warned of, naming
+/// it and counting the others; a scene where every body is left at the default, or every
+/// body is given its mass, is not.
+#[test]
+fn default_density_beside_given_masses_is_warned_of() {
+    let scene = |ball: &str, boxes: &str| {
+        format!(
+            "Scene(gravity: (0.0, 0.0, -9.81), duration: 1.0, bodies: [
+                Body(name: \"floor\", shape: Box(half_extents: (1.0, 1.0, 0.1)), position: (0.0, 0.0, -0.1), motion: Fixed),
+                Body(name: \"a\", shape: Box(half_extents: (0.1, 0.1, 0.05)), position: (0.0, 0.0, 0.05){boxes}),
+                Body(name: \"b\", shape: Box(half_extents: (0.1, 0.1, 0.05)), position: (0.0, 0.0, 0.15){boxes}),
+                Body(name: \"ball\", shape: Sphere(radius: 0.05), position: (0.0, 0.0, 0.8){ball}),
+            ])"
+        )
+    };
+    let warnings = |ron: String| SceneDesc::from_ron(&ron, "test").unwrap().warnings();
+    let mixed = warnings(scene(", mass: Density(7800.0)", ""));
+    assert_eq!(mixed.len(), 1, "{mixed:?}");
+    assert!(
+        mixed[0].contains("\"a\" and 1 other body") && mixed[0].contains("\"ball\""),
+        "{mixed:?}"
+    );
+    assert!(warnings(scene("", "")).is_empty());
+    assert!(warnings(scene(", mass: Density(7800.0)", ", mass: Density(700.0)")).is_empty());
+}
