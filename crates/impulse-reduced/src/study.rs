@@ -173,7 +173,10 @@ pub fn fig7(
     for &s in loads {
         let sol = solve_statics(m, &[load_of(s)], warm.as_ref(), &statics)?;
         let full = link_poses(m, &sol.config);
-        let displacement = scaled_norm(&(m.links[link].rest.inverse() * full[link]).log(), r);
+        // A pose's relative displacement from the end effector's rest pose, ‖(v/r, ω/π)‖.
+        let own = |p: &Pose| scaled_norm(&(m.links[link].rest.inverse() * *p).log(), r);
+        let displacement = own(&full[link]);
+
         let mut ft = vec![[0.0; 6]; ne];
         ft[ee] = [
             direction.x * s,
@@ -191,7 +194,7 @@ pub fn fig7(
         let internal = set.internal_poses(&bee, &alpha);
         let bp = assemble(m, &set.models[0], &bee, &internal);
         let pose_err = |p: &Pose| scaled_norm(&(full[link].inverse() * *p).log(), r);
-        let own = |p: &Pose| scaled_norm(&(m.links[link].rest.inverse() * *p).log(), r);
+
         rows.push(Fig7Row {
             load: s,
             displacement,

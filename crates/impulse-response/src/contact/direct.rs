@@ -221,22 +221,29 @@ fn solve_from(
             }
         }
         // W on the active set, column by column (compressed sparse columns, rows ascending).
-        let mut a = Columns::default();
+        let mut a = Columns::new();
         let mut rhs = Mat::<f64>::zeros(m, 1);
         // Every non-zero response (contact, column, velocity change), Off contacts included:
         // their velocities after the solve say whether they must press.
         let mut entries: Vec<(usize, usize, DVec3)> = Vec::new();
         // Columns: the response of every neighbouring contact to one unknown's impulse.
         for j in 0..n {
-            let dirs: Vec<DVec3> = match class[j] {
+            let (dirs, count) = match class[j] {
                 Class::Off => continue,
-                Class::Stick => vec![DVec3::X, DVec3::Y, DVec3::Z],
+                Class::Stick => ([DVec3::X, DVec3::Y, DVec3::Z], 3),
                 Class::Slide(d) => {
                     let mu = contacts[j].friction;
-                    vec![DVec3::new(mu * d.x, mu * d.y, 1.0)]
+                    (
+                        [
+                            DVec3::new(mu * d.x, mu * d.y, 1.0),
+                            DVec3::ZERO,
+                            DVec3::ZERO,
+                        ],
+                        1,
+                    )
                 }
             };
-            for (q, dir) in dirs.iter().enumerate() {
+            for (q, dir) in dirs[..count].iter().enumerate() {
                 let col = offset[j] + q;
                 // `near` is ascending, and so are the offsets: the rows come in order.
                 for &(i, unit) in &responses[j] {
@@ -273,11 +280,9 @@ fn solve_from(
         // ΔP = −P exactly, whatever λ: the warm start's stresses are removed instead of
         // carried (they put resting corners on their friction cones, and the active set then
         // flipped between sticking and sliding every round without converging).
-        let diag = (0..m).map(|i| a.diagonal(i).abs()).fold(0.0_f64, f64::max);
-        let lambda = REGULARISATION * diag;
-        if !a.add_to_diagonal(lambda) {
+        let Some(lambda) = a.regularise(REGULARISATION) else {
             return false;
-        }
+        };
         for k in 0..n {
             let p = contacts[k].impulse;
             match class[k] {
@@ -290,7 +295,7 @@ fn solve_from(
                 Class::Slide(_) => rhs[(offset[k], 0)] -= lambda * p.z,
             }
         }
-        let Some(x) = solve_linear(m, &a, rhs) else {
+        let Some(x) = solve_linear(m, a, rhs) else {
             return false;
         };
         if !(0..m).all(|i| x[(i, 0)].is_finite()) {
@@ -384,7 +389,7 @@ fn solve_from(
 }
 
 /// A square matrix in compressed sparse columns, built column by column with ascending rows.
-#[derive(Default)]
+#[derive(Clone)]
 struct Columns {
     /// Start of each column in `rows` and `values`, and the end of the last.
     starts: Vec<usize>,
@@ -393,26 +398,29 @@ struct Columns {
 }
 
 impl Columns {
+    /// No columns yet.
+    fn new() -> Self {
+        Self {
+            starts: vec![0],
+            rows: Vec::new(),
+            values: Vec::new(),
+        }
+    }
+
     /// Appends an entry to the current column (rows ascending).
     fn push(&mut self, row: usize, value: f64) {
-        if self.starts.is_empty() {
-            self.starts.push(0);
-        }
         self.rows.push(row);
         self.values.push(value);
     }
 
     /// Ends the current column.
     fn end_column(&mut self) {
-        if self.starts.is_empty() {
-            self.starts.push(0);
-        }
         self.starts.push(self.rows.len());
     }
 
     /// Columns so far.
     fn len(&self) -> usize {
-        self.starts.len().saturating_sub(1)
+        self.starts.len() - 1
     }
 
     /// The entry of column `c` and row `r`, or `None` where there is none.
@@ -436,21 +444,22 @@ impl Columns {
             })
     }
 
-    /// The diagonal entry of column `i` (zero where there is none).
-    fn diagonal(&self, i: usize) -> f64 {
-        self.position(i, i).map_or(0.0, |k| self.values[k])
-    }
-
-    /// Adds `value` to every diagonal entry; false when one is missing (a contact always
-    /// responds to its own impulse, so that is a defect of the assembly).
-    fn add_to_diagonal(&mut self, value: f64) -> bool {
-        for i in 0..self.len() {
-            match self.position(i, i) {
-                Some(k) => self.values[k] += value,
-                None => return false,
-            }
+    /// Adds λ = `relative` × the largest |diagonal entry| to every diagonal entry and returns
+    /// λ; `None` when a diagonal entry is missing (a contact always responds to its own
+    /// impulse, so that is a defect of the assembly).
+    fn regularise(&mut self, relative: f64) -> Option<f64> {
+        let diagonal: Vec<usize> = (0..self.len())
+            .map(|i| self.position(i, i))
+            .collect::<Option<_>>()?;
+        let largest = diagonal
+            .iter()
+            .map(|&k| self.values[k].abs())
+            .fold(0.0_f64, f64::max);
+        let lambda = relative * largest;
+        for k in diagonal {
+            self.values[k] += lambda;
         }
-        true
+        Some(lambda)
     }
 }
 
@@ -467,13 +476,15 @@ thread_local! {
         const { RefCell::new(None) };
 }
 
-/// The symbolic LU of `a`'s pattern (supernodal, faer's column ordering), reused when the
-/// pattern is the last one this thread analysed.
-fn symbolic_lu(a: &Columns, sparse: &SparseColMat<usize, f64>) -> Option<SymbolicLu<usize>> {
+/// The symbolic LU of `sparse`'s pattern (supernodal, faer's column ordering), reused when
+/// the pattern is the last one this thread analysed.
+fn symbolic_lu(sparse: &SparseColMat<usize, f64>) -> Option<SymbolicLu<usize>> {
+    let pattern = sparse.symbolic();
+    let (starts, rows) = (pattern.col_ptr(), pattern.row_idx());
     LAST_SYMBOLIC.with(|last| {
         let mut last = last.borrow_mut();
-        if let Some((starts, rows, symbolic)) = last.as_ref() {
-            if *starts == a.starts && *rows == a.rows {
+        if let Some((s, r, symbolic)) = last.as_ref() {
+            if s == starts && r == rows {
                 return Some(symbolic.clone());
             }
         }
@@ -481,8 +492,8 @@ fn symbolic_lu(a: &Columns, sparse: &SparseColMat<usize, f64>) -> Option<Symboli
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let symbolic = factorize_symbolic_lu(sparse.symbolic(), params).ok()?;
-        *last = Some((a.starts.clone(), a.rows.clone(), symbolic.clone()));
+        let symbolic = factorize_symbolic_lu(pattern, params).ok()?;
+        *last = Some((starts.to_vec(), rows.to_vec(), symbolic.clone()));
         Some(symbolic)
     })
 }
@@ -529,7 +540,7 @@ fn dense_solve(mut lu: Mat<f64>, mut rhs: Mat<f64>) -> Mat<f64> {
 /// Solves A·x = rhs for the m × m matrix `a`: dense LU up to [`DENSE_UP_TO`] unknowns,
 /// sparse supernodal LU beyond, sequentially (the result must not depend on the thread
 /// count). `None` when the sparse factorisation fails (a structurally singular system).
-fn solve_linear(m: usize, a: &Columns, mut rhs: Mat<f64>) -> Option<Mat<f64>> {
+fn solve_linear(m: usize, a: Columns, mut rhs: Mat<f64>) -> Option<Mat<f64>> {
     if !a.is_valid(m) {
         return None;
     }
@@ -542,10 +553,9 @@ fn solve_linear(m: usize, a: &Columns, mut rhs: Mat<f64>) -> Option<Mat<f64>> {
         }
         return Some(dense_solve(dense, rhs));
     }
-    let pattern =
-        SymbolicSparseColMat::<usize>::new_checked(m, m, a.starts.clone(), None, a.rows.clone());
-    let sparse = SparseColMat::<usize, f64>::new(pattern, a.values.clone());
-    let symbolic = symbolic_lu(a, &sparse)?;
+    let pattern = SymbolicSparseColMat::<usize>::new_checked(m, m, a.starts, None, a.rows);
+    let sparse = SparseColMat::<usize, f64>::new(pattern, a.values);
+    let symbolic = symbolic_lu(&sparse)?;
     let mut numeric = NumericLu::new();
     let par = Par::Seq;
     let mut scratch = MemBuffer::try_new(
@@ -620,7 +630,7 @@ mod tests {
             seed ^= seed << 17;
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
-        let mut a = Columns::default();
+        let mut a = Columns::new();
         for c in 0..m {
             let k = c / block;
             let first = k.saturating_sub(1) * block;
@@ -636,7 +646,7 @@ mod tests {
         for i in 0..m {
             rhs[(i, 0)] = next();
         }
-        let x = solve_linear(m, &a, rhs.clone()).expect("regular system");
+        let x = solve_linear(m, a.clone(), rhs.clone()).expect("regular system");
         let mut residual = vec![0.0; m];
         for c in 0..m {
             for k in a.starts[c]..a.starts[c + 1] {
@@ -653,7 +663,7 @@ mod tests {
     #[test]
     fn a_malformed_pattern_is_refused() {
         let m = DENSE_UP_TO + 1;
-        let mut a = Columns::default();
+        let mut a = Columns::new();
         for c in 0..m {
             a.push(c, 1.0);
             if c == 5 {
@@ -662,6 +672,6 @@ mod tests {
             a.end_column();
         }
         assert!(!a.is_valid(m));
-        assert!(solve_linear(m, &a, Mat::<f64>::zeros(m, 1)).is_none());
+        assert!(solve_linear(m, a, Mat::<f64>::zeros(m, 1)).is_none());
     }
 }
