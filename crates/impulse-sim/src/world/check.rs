@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 use impulse_collide::schedule::{Mover, free_coefficients};
-use impulse_collide::{Closest, Convex, FeaturePair, Motion, depth, patch, shape};
+use impulse_collide::{Closest, Convex, FeaturePair, Motion, depth, manifold, patch, shape};
 
 use super::{BodyHandle, ContactEvent, ContactFailure, MAX_FAILURES_KEPT, Material, World};
 use crate::contact::{self, ContactKind};
@@ -35,6 +35,8 @@ pub(super) struct Scan {
     others_key: f64,
     /// The closest piece pair (piece indices of the two bodies).
     pieces: (usize, usize),
+    /// Its slot in the pair's per-piece-pair tables.
+    slot: usize,
     /// How deep the bodies interpenetrate along the normal when touching (0 otherwise).
     depth: f64,
     /// The two bodies' motions at the check (for their time-of-impact bound).
@@ -176,6 +178,7 @@ impl World {
             normal,
             others_key,
             pieces: (slot / nb, slot % nb),
+            slot,
             depth,
             motions: (motion_a, motion_b),
         }
@@ -315,7 +318,25 @@ impl World {
             return Some(mid);
         };
         let eps = self.collision_epsilon();
-        let near = patch::near_vertices(x, &(ba.pose * pa.pose), y, &(bb.pose * pb.pose), n, eps);
+        let (pose_a, pose_b) = (ba.pose * pa.pose, bb.pose * pb.pose);
+        let mut near = patch::near_vertices(x, &pose_a, y, &pose_b, n, eps);
+        if scan.depth > 0.0 {
+            // Overlapping: the closest points are only a witness, and where two faces'
+            // edges cross (boxes turned against each other, no corner of either inside the
+            // other) no vertex is near. The manifold's points along the normal are the
+            // deepest feature clipped against the other's face: where the overlap sinks.
+            let warm = self
+                .pairs
+                .get(&(a, b))
+                .and_then(|s| s.features.get(scan.slot))
+                .copied()
+                .unwrap_or_default();
+            if let Ok(Some(m)) =
+                manifold::manifold_along(&pa.convex, &pose_a, &pb.convex, &pose_b, -n, warm, eps)
+            {
+                near.extend(m.points().iter().map(|p| p.midpoint()));
+            }
+        }
         if near.is_empty() {
             return Some(mid);
         }
@@ -324,7 +345,6 @@ impl World {
         // askew on another. Inside it, it is one of them or between them.
         let centre = near.iter().sum::<DVec3>() / near.len() as f64;
         let spread = near.iter().map(|p| p.distance(centre)).fold(0.0, f64::max);
-        let mut near = near;
         if mid.distance(centre) > spread + eps {
             near.push(mid);
         }
