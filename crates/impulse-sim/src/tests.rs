@@ -349,47 +349,99 @@ fn default_density_beside_given_masses_is_warned_of() {
     assert!(warnings(scene(", mass: Density(7800.0)", ", mass: Density(700.0)")).is_empty());
 }
 
-/// Two boxes of the same size, the upper turned 20° about the vertical, so that no corner of
-/// either lies over the other's face: where they overlap, only edges cross. The upper box
-/// tips (ω about y) and comes down, so the crossing edges on one side sink at several m/s
-/// while the other side rises. The contact must act where the overlap sinks: the
-/// independent monitor, sampling every loop step, sees no penetration beyond ε_c, and no
-/// contact gains energy. Placed overlapping by half of ε_c, the pair is in contact (and
-/// overlapping) from the start, in both contact models.
+/// Two boxes of the same size, the upper turned about the vertical, so that no corner of
+/// either lies over the other's face: where they overlap, only edges cross. The upper box is
+/// placed 0.5 ε_c into the lower one (contact, and overlapping, from the start), comes down
+/// and tips about a horizontal axis, so the crossing edges on one side sink at up to several
+/// m/s while the other side rises, or the box flies off turning. The contact must act where
+/// the overlap sinks, along the normal of the overlap as it is now: the independent monitor,
+/// sampling every loop step, sees no penetration beyond ε_c, and no collision gains energy.
+/// Case 0 is fixed (20°, 20 rad/s about −y, sinking at 1 m/s); 199 are random (sizes
+/// 10–30 cm, turned 5–45°, sinking at 0.2–3.2 m/s, tipping at 5–45 rad/s, densities over
+/// four decades, random μ and e), in both contact models. Without the manifold's points as
+/// candidates for an overlapping pair, case 0 sank 44.9 ε_c and 195 of 200 random cases
+/// went deeper than ε_c; with the normal of the last clear gap kept while overlapping, case
+/// 76 sank 12 ε_c.
 #[test]
-fn a_box_tipping_into_a_turned_box_is_stopped_where_its_edges_cross() {
+fn boxes_tipping_into_turned_boxes_are_stopped_where_their_edges_cross() {
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand::{RngExt, SeedableRng};
     let eps: f64 = 1e-4;
-    let (h, spin, sink) = (0.05, 20.0, 1.0);
-    for model in ["Impulse", "Switching"] {
-        let ron = format!(
-            "Scene(gravity: (0, 0, -9.81), collision_epsilon: {eps}, contact_model: {model},
-              default_contact: Contact(friction: 0.3, restitution: 0.5),
-              bodies: [
-                Body(name: \"lower\", shape: Box(half_extents: (0.1, 0.1, {h})), motion: Fixed),
-                Body(name: \"upper\", shape: Box(half_extents: (0.1, 0.1, {h})),
-                     position: (0, 0, {z}), rotation: AxisAngle(axis: (0, 0, 1), degrees: 20.0),
-                     velocity: (0, 0, -{sink}), angular_velocity: (0, -{spin}, 0),
-                     mass: Density(1000.0)),
-              ])",
-            z = 2.0 * h - 0.5 * eps,
-        );
-        let mut w = world(&ron);
-        w.set_checking(true);
-        w.set_event_log(true);
-        w.step_until(0.02).unwrap();
-        let depth = w.checked_penetration().unwrap().max_depth;
-        assert!(depth <= eps, "{model}: penetration {} ε_c", depth / eps);
-        assert!(
-            w.events()
-                .iter()
-                .any(|e| e.kind == crate::contact::ContactKind::Collision),
-            "{model}: the sinking edges were met by no collision"
-        );
-        for e in w.events() {
-            assert!(
-                e.energy_after <= e.energy_before * (1.0 + 1e-9),
-                "{model}: a contact gained energy: {e:?}"
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(177);
+    for case in 0..200 {
+        let (half, turn, sink, spin, axis, density, mu, e) = if case == 0 {
+            (
+                [0.1, 0.1, 0.05],
+                20.0,
+                1.0,
+                20.0,
+                -std::f64::consts::FRAC_PI_2,
+                1000.0,
+                0.3,
+                0.5,
+            )
+        } else {
+            (
+                [
+                    rng.random_range(0.05..0.15),
+                    rng.random_range(0.05..0.15),
+                    rng.random_range(0.02..0.07),
+                ],
+                rng.random_range(5.0..45.0),
+                rng.random_range(0.2..3.2),
+                rng.random_range(5.0..45.0),
+                rng.random_range(0.0..std::f64::consts::TAU),
+                10f64.powf(rng.random_range(0.0..4.0)),
+                rng.random_range(0.0..1.0),
+                rng.random_range(0.0..1.0),
+            )
+        };
+        let [hx, hy, hz] = half;
+        for model in ["Impulse", "Switching"] {
+            let ron = format!(
+                "Scene(gravity: (0, 0, -9.81), collision_epsilon: {eps}, contact_model: {model},
+                  default_contact: Contact(friction: {mu}, restitution: {e}),
+                  bodies: [
+                    Body(name: \"lower\", shape: Box(half_extents: ({hx}, {hy}, {hz})), motion: Fixed),
+                    Body(name: \"upper\", shape: Box(half_extents: ({hx}, {hy}, {hz})),
+                         position: (0, 0, {z}), rotation: AxisAngle(axis: (0, 0, 1), degrees: {turn}),
+                         velocity: (0, 0, -{sink}), angular_velocity: ({wx}, {wy}, 0),
+                         mass: Density({density})),
+                  ])",
+                z = 2.0 * hz - 0.5 * eps,
+                wx = spin * axis.cos(),
+                wy = spin * axis.sin(),
             );
+            let mut w = world(&ron);
+            w.set_checking(true);
+            w.set_event_log(true);
+            w.step_until(0.05).unwrap();
+            let depth = w.checked_penetration().unwrap().max_depth;
+            assert!(
+                depth <= eps,
+                "case {case}, {model}: penetration {} ε_c",
+                depth / eps
+            );
+            if case == 0 {
+                assert!(
+                    w.events()
+                        .iter()
+                        .any(|e| e.kind == crate::contact::ContactKind::Collision),
+                    "{model}: the sinking edges were met by no collision"
+                );
+            }
+            // Collisions never gain energy (Stronge, e ≤ 1); a microcollision's restitution is
+            // boosted by design (thesis eq. 3.18, within its rebound limit).
+            let collisions = w
+                .events()
+                .iter()
+                .filter(|e| e.kind == crate::contact::ContactKind::Collision);
+            for ev in collisions {
+                assert!(
+                    ev.energy_after <= ev.energy_before * (1.0 + 1e-9),
+                    "case {case}, {model}: a contact gained energy: {ev:?}"
+                );
+            }
         }
     }
 }

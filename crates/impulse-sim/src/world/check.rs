@@ -15,6 +15,13 @@ use crate::error::SimError;
 /// ([`impulse_collide::depth::separating_axis`]) gives it instead. Default `1e-9`.
 pub const NORMAL_FROM_POINTS_REL: f64 = 1e-9;
 
+/// An overlapping pair keeps its contact normal while the separating axis has turned from it
+/// by at most this angle (rad): a body resting or rolling on another within the envelope
+/// keeps the same normal to the bit (a normal recomputed at every check differs in rounding,
+/// and a hopping ball's trajectory is sensitive to it), while a tipping body's normal
+/// follows it. Default `1e-6`.
+pub const OVERLAP_NORMAL_TURN: f64 = 1e-6;
+
 /// A pair is held only while rotation moves its surfaces slower than this fraction of the
 /// speed at which a held pair is released ([`World::rotation_limit`]): the gap between the two
 /// keeps a rocking body from switching at every step. Default `0.5`.
@@ -111,14 +118,21 @@ impl World {
                     state.normals[slot] = Some(-dir);
                 }
             } else {
-                // Touching, overlapping, or so close that the closest points' direction is
-                // rounding noise: the normal last seen at a clear gap, or, with none (bodies
-                // placed touching), the separating axis; the depth along it.
+                // Touching, or so close that the closest points' direction is rounding noise:
+                // the normal last seen at a clear gap, or, with none (bodies placed touching),
+                // the separating axis. Overlapping: the separating axis (least overlap) at
+                // every check, since a body that turns makes the normal of the last clear gap
+                // stale (a tipping box's face comes down across the other's edge at a growing
+                // angle); a normal it has not turned from by [`OVERLAP_NORMAL_TURN`] is kept.
+                // The depth along it.
                 let n = match state.normals[slot] {
-                    Some(n) => n,
-                    None => {
+                    Some(n) if !c.penetrating => n,
+                    old => {
                         let p = depth::separating_axis(&pa.convex, &pose_a, &pb.convex, &pose_b);
-                        let n = p.normal;
+                        let n = match old {
+                            Some(o) if o.angle_between(p.normal) <= OVERLAP_NORMAL_TURN => o,
+                            _ => p.normal,
+                        };
                         if n.is_finite() {
                             state.normals[slot] = Some(n);
                         }
