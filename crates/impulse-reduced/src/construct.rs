@@ -310,12 +310,6 @@ impl ReducedModel {
         })
     }
 
-    /// Number of end effectors.
-    #[must_use]
-    pub fn end_effector_count(&self) -> usize {
-        self.end_effectors.len()
-    }
-
     /// The twist map of internal link number `k` (column-major 6 × 6|E|).
     #[must_use]
     pub fn twist_map(&self, k: usize) -> &[f64] {

@@ -20,6 +20,21 @@
 //! ignored, as in the paper. Gravity then acts on the base only (in the base's falling frame
 //! the end effectors feel none), so the structure's linear momentum changes exactly by the
 //! external impulses.
+//!
+//! **\[fix\] §6.1 "Free-body base link" (the section has no numbered equation; it follows
+//! eq. 23).** Read literally, the base moves its *rest* centre of mass with `P/m` while the end
+//! effectors (eq. 8, stepped by eq. 23) and internal links
+//! (eq. 22) move relative to it: the springs and dampers push the end effectors without any
+//! reaction on the base, so the momentum of the whole mechanism, `Σ_l m_l v_l`, swings with
+//! the internal motion (0.12 kg·m/s for the `floating` test mechanism with its tip released
+//! from 1 cm). Internal forces cannot move the centre of mass, so here the base's momentum `P`
+//! is the whole mechanism's and the base is placed each step so that the centre of mass of the
+//! *deformed* mechanism (end effectors by eq. 6, internal links by eqs. 22 and 6, each with its
+//! own mass) moves by exactly `h P/m`: the base recoils against the internal motion and
+//! `Σ_l m_l v_l = P` up to rounding. The recoil is kept out of the base twist used for contact
+//! (that still follows `P/m` at the rest centre of mass, as in the paper's `ᶜφ_{k+b}`). Cost:
+//! two internal-link updates per step for a free base (before and after the step, since ξ
+//! may be edited between steps); none for a fixed base.
 
 use faer::Mat;
 use glam::DVec3;
@@ -155,6 +170,14 @@ pub struct ReducedSim {
     base_mass_inv: Mat6,
     /// The internal links' per-step kernel, built once like `a_inv`.
     links: InternalLinks,
+    /// Mass and centre of mass (body frame) of every link (free base: the centre of mass of
+    /// the deformed mechanism, see [`ReducedSim::deformed_com`]).
+    link_mass: Vec<(f64, DVec3)>,
+    /// The base link's index.
+    base_link: usize,
+    /// Links that are neither the base, an end effector nor an internal link, with their rest
+    /// poses (carried rigidly with the base frame, as [`crate::study::assemble`] places them).
+    other_links: Vec<(usize, Pose)>,
 }
 
 impl ReducedSim {
@@ -212,6 +235,18 @@ impl ReducedSim {
             base_rest: model.base_pose,
             base_mass_inv,
             links: InternalLinks::new(&model),
+            link_mass: m
+                .links
+                .iter()
+                .map(|l| (l.inertia.mass, l.inertia.com))
+                .collect(),
+            base_link: m.base,
+            other_links: (0..m.links.len())
+                .filter(|l| {
+                    *l != m.base && !model.end_effectors.contains(l) && !model.internal.contains(l)
+                })
+                .map(|l| (l, m.links[l].rest))
+                .collect(),
             model,
         })
     }
@@ -255,6 +290,36 @@ impl ReducedSim {
             poses[m.base] = b.pose;
         }
         crate::study::constraint_error(m, &poses)
+    }
+
+    /// Centre of mass of the deformed mechanism in the base's body frame, for the current ξ:
+    /// `Σ_l m_l H_b0⁻¹ H_l(ξ) c_l / Σ_l m_l`, with `H_l` the end effectors' poses of eq. 6 and
+    /// the internal links' of eqs. 22 and 6 (relative to the base at rest), and `c_l` each
+    /// link's own centre of mass. Costs one internal-link update.
+    fn deformed_com(&self) -> DVec3 {
+        let mut internal = vec![Pose::IDENTITY; self.model.internal.len()];
+        self.links.update(&self.xi, &Pose::IDENTITY, &mut internal);
+        let mass_com = |l: usize, pose: &Pose| {
+            let (mass, com) = self.link_mass[l];
+            pose.transform_point(com) * mass
+        };
+        let mut sum = mass_com(self.base_link, &self.base_rest);
+        let mut mass = self.link_mass[self.base_link].0;
+        for (i, &e) in self.model.end_effectors.iter().enumerate() {
+            let pose = self.model.reference[i] * Pose::exp(&self.twist(&self.xi, i));
+            sum += mass_com(e, &pose);
+            mass += self.link_mass[e].0;
+        }
+        for (k, &l) in self.model.internal.iter().enumerate() {
+            sum += mass_com(l, &internal[k]);
+            mass += self.link_mass[l].0;
+        }
+        for (l, rest) in &self.other_links {
+            let l = *l;
+            sum += mass_com(l, rest);
+            mass += self.link_mass[l].0;
+        }
+        self.base_rest.inverse_transform_point(sum / mass)
     }
 
     /// Total energy of the end-effector system, `½φᵀMφ + ½ξᵀKξ` (J), relative to the bias.
@@ -331,6 +396,10 @@ impl ReducedSim {
         let n = self.xi.len();
         let ne = self.model.end_effectors.len();
         let h = self.h;
+        // Free base: where the deformed mechanism's centre of mass is now (world).
+        let com_now = self
+            .base
+            .map(|b| b.pose.transform_point(self.deformed_com()));
         // Wrenches on the end effectors: held external loads, gravity (fixed base only).
         let mut w = self.external.clone();
         if self.base.is_none() {
@@ -391,17 +460,20 @@ impl ReducedSim {
             *x += h * p;
         }
         self.phi = phi;
-        if let Some(b) = self.base.as_mut() {
-            // The centre of mass moves with P/m and the base turns with ω (world), each
-            // exactly over the step for constant momenta.
+        if let (Some(com_now), Some(com_new)) = (com_now, self.base.map(|_| self.deformed_com())) {
+            let b = self.base.as_mut().expect("free base");
+            // [fix] §6.1: the centre of mass of the whole deformed mechanism moves with P/m,
+            // exactly over the step for a constant momentum, whatever the internal motion did
+            // (internal forces do not move it); the base turns with ω (world) and is placed
+            // so that its deformed centre of mass `com_new` (base frame, at ξₙ₊₁) lands there.
             let inertia = &self.model.base_inertia;
             let t = b.twist(inertia);
-            let com = b.pose.transform_point(inertia.com) + b.momentum * (h / inertia.mass);
+            let com = com_now + b.momentum * (h / inertia.mass);
             let w = b.pose.transform_vector(t.w);
             let rotation = (impulse_geom::se3::so3_exp(w * h) * b.pose.rotation).normalize();
             b.pose = Pose {
                 rotation,
-                translation: com - rotation * inertia.com,
+                translation: com - rotation * com_new,
             };
         }
         report

@@ -90,23 +90,6 @@ pub fn assemble(m: &Mechanism, model: &ReducedModel, ee: &[Pose], internal: &[Po
     poses
 }
 
-/// Single-model static poses of every link under stacked body wrenches `w` (rest frames).
-#[must_use]
-pub fn single_model_poses(m: &Mechanism, model: &ReducedModel, w: &[f64]) -> Vec<Pose> {
-    let (ee, internal) = model.static_twists(w);
-    let ee: Vec<Pose> = ee
-        .iter()
-        .zip(&model.reference)
-        .map(|(t, h)| *h * Pose::exp(t))
-        .collect();
-    let internal: Vec<Pose> = internal
-        .iter()
-        .zip(&model.internal_reference)
-        .map(|(t, h)| *h * Pose::exp(t))
-        .collect();
-    assemble(m, model, &ee, &internal)
-}
-
 /// One row of the Fig. 7 study. Each curve of the figure plots a method's constraint error
 /// against *that method's own* end-effector displacement (see the crate docs, "Fig. 7").
 #[derive(Copy, Clone, Debug, PartialEq)]

@@ -224,14 +224,6 @@ impl WrenchMaps {
             .transpose();
         Ok(to_parent.mul_wrench(&carried))
     }
-
-    /// The wrench every link in `links` transmits (eq. 20), e.g. a model's internal links.
-    ///
-    /// # Errors
-    /// As [`WrenchMaps::link_wrench`].
-    pub fn link_wrenches(&self, links: &[usize], w: &[Wrench]) -> Result<Vec<Wrench>, Error> {
-        links.iter().map(|&l| self.link_wrench(l, w)).collect()
-    }
 }
 
 #[cfg(test)]
