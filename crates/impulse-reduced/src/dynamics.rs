@@ -33,8 +33,8 @@
 //! own mass) moves by exactly `h P/m`: the base recoils against the internal motion and
 //! `Σ_l m_l v_l = P` up to rounding. The recoil is kept out of the base twist used for contact
 //! (that still follows `P/m` at the rest centre of mass, as in the paper's `ᶜφ_{k+b}`). Cost:
-//! two internal-link updates per step for a free base (before and after the step, since ξ
-//! may be edited between steps); none for a fixed base.
+//! one internal-link update per step for a free base (at the end of the step; the start
+//! reuses the last step's unless ξ was edited in between); none for a fixed base.
 
 use faer::Mat;
 use glam::DVec3;
@@ -178,6 +178,9 @@ pub struct ReducedSim {
     /// Links that are neither the base, an end effector nor an internal link, with their rest
     /// poses (carried rigidly with the base frame, as [`crate::study::assemble`] places them).
     other_links: Vec<(usize, Pose)>,
+    /// The deformed centre of mass (base frame) computed at the end of the last step, and the
+    /// ξ it belongs to: the next step starts from it unless ξ was edited in between.
+    com_at: Option<(Vec<f64>, DVec3)>,
 }
 
 impl ReducedSim {
@@ -247,6 +250,7 @@ impl ReducedSim {
                 })
                 .map(|l| (l, m.links[l].rest))
                 .collect(),
+            com_at: None,
             model,
         })
     }
@@ -255,7 +259,7 @@ impl ReducedSim {
     /// fixed base).
     #[must_use]
     pub fn end_effector_pose(&self, i: usize) -> Pose {
-        let local = self.model.reference[i] * Pose::exp(&self.twist(&self.xi, i));
+        let local = self.end_effector_local(i);
         match &self.base {
             Some(b) => b.pose * self.base_rest.inverse() * local,
             None => local,
@@ -292,6 +296,11 @@ impl ReducedSim {
         crate::study::constraint_error(m, &poses)
     }
 
+    /// Pose of end effector `i` relative to the base at rest, `H_e exp(ξ_e)` (eq. 6).
+    fn end_effector_local(&self, i: usize) -> Pose {
+        self.model.reference[i] * Pose::exp(&self.twist(&self.xi, i))
+    }
+
     /// Centre of mass of the deformed mechanism in the base's body frame, for the current ξ:
     /// `Σ_l m_l H_b0⁻¹ H_l(ξ) c_l / Σ_l m_l`, with `H_l` the end effectors' poses of eq. 6 and
     /// the internal links' of eqs. 22 and 6 (relative to the base at rest), and `c_l` each
@@ -306,8 +315,7 @@ impl ReducedSim {
         let mut sum = mass_com(self.base_link, &self.base_rest);
         let mut mass = self.link_mass[self.base_link].0;
         for (i, &e) in self.model.end_effectors.iter().enumerate() {
-            let pose = self.model.reference[i] * Pose::exp(&self.twist(&self.xi, i));
-            sum += mass_com(e, &pose);
+            sum += mass_com(e, &self.end_effector_local(i));
             mass += self.link_mass[e].0;
         }
         for (k, &l) in self.model.internal.iter().enumerate() {
@@ -397,9 +405,13 @@ impl ReducedSim {
         let ne = self.model.end_effectors.len();
         let h = self.h;
         // Free base: where the deformed mechanism's centre of mass is now (world).
-        let com_now = self
-            .base
-            .map(|b| b.pose.transform_point(self.deformed_com()));
+        let com_now = self.base.map(|b| {
+            let local = match &self.com_at {
+                Some((xi, com)) if *xi == self.xi => *com,
+                _ => self.deformed_com(),
+            };
+            b.pose.transform_point(local)
+        });
         // Wrenches on the end effectors: held external loads, gravity (fixed base only).
         let mut w = self.external.clone();
         if self.base.is_none() {
@@ -460,7 +472,9 @@ impl ReducedSim {
             *x += h * p;
         }
         self.phi = phi;
-        if let (Some(com_now), Some(com_new)) = (com_now, self.base.map(|_| self.deformed_com())) {
+        if let Some(com_now) = com_now {
+            let com_new = self.deformed_com();
+            self.com_at = Some((self.xi.clone(), com_new));
             let b = self.base.as_mut().expect("free base");
             // [fix] §6.1: the centre of mass of the whole deformed mechanism moves with P/m,
             // exactly over the step for a constant momentum, whatever the internal motion did

@@ -318,7 +318,9 @@ impl World {
     /// vertex within ε_c of the other or inside it), so that a body resting flat is pushed
     /// through its support rather than at a corner, a rocking one where it comes down, and a
     /// sinking corner is found even when the closest-features query returns only a witness;
-    /// the closest points' midpoint joins them when it lies apart (an edge across an edge);
+    /// the closest points' midpoint joins them when it lies apart (an edge across an edge), and
+    /// when the pair overlaps, so do its manifold's points (edges crossing edges, no vertex
+    /// near);
     /// `None` when none of them approaches (nothing presses). Without near vertices, and for
     /// smooth pieces, the midpoint of the closest points.
     fn contact_point(&self, (a, b): (u32, u32), scan: &Scan, n: DVec3) -> Option<DVec3> {
