@@ -22,8 +22,13 @@
 //!   a sliding body's motion under constant friction is exact, and a ball rolls without hops.
 //! - **Position stabilisation**: a held contact rests at the gap g_r = `rest_gap_fraction`·ε_c
 //!   inside the contact envelope [0, ε_c]; each step asks for the end-of-step normal speed
-//!   u_n ≥ β·(g_r − gap)/h (β = [`SustainedSettings::stabilisation`]), which pushes an overlap
-//!   back and lets a gap close, without the velocity ringing of a trapezoidal target; an
+//!   u_n ≥ β·(g_r − gap)/h (β = [`SustainedSettings::stabilisation`]) for a gap below g_r,
+//!   which pushes it back without the velocity ringing of a trapezoidal target. A gap inside
+//!   the *rest band* [g_r, g_pull] (g_pull = `pull_gap_fraction`·ε_c) is asked for nothing
+//!   (u_n ≥ 0), a wider one is closed at the same rate toward g_pull: bodies already touching
+//!   within the band need no motion, and a closed loop of contacts (a pyramid, leaning
+//!   dominos) is not asked for approach speeds that differ per contact, which no rigid motion
+//!   of the loop meets and which left its solver unconverged at every step; an
 //!   overlap (gap < 0) is asked back in full within h on top of that (a contact sliding on a
 //!   turning body is driven inward by about ½·ω²·r·h² a step, which β alone lets settle
 //!   β⁻¹ times deeper). The
@@ -78,6 +83,10 @@ pub struct SustainedSettings {
     /// Where a held contact rests inside the contact envelope, as a fraction of ε_c. Default
     /// `0.1`: a stack of n blocks stands n·0.1·ε_c taller than its blocks.
     pub rest_gap_fraction: f64,
+    /// Upper edge of the rest band, as a fraction of ε_c: a held contact whose gap lies
+    /// between g_r and this is neither pushed nor pulled (target normal speed 0); a wider gap
+    /// is closed at the β rate toward it. Default `0.5`.
+    pub pull_gap_fraction: f64,
     /// Fraction β of a gap error corrected per step. Default `0.01`: 0.2 made stacks of 16
     /// sway (the correction feeds speed faster than the solver settles a tall island).
     pub stabilisation: f64,
@@ -126,6 +135,7 @@ impl Default for SustainedSettings {
             min_step: DEFAULT_MIN_STEP,
             switch_speed_factor: 1.0,
             rest_gap_fraction: 0.1,
+            pull_gap_fraction: 0.5,
             stabilisation: 0.01,
             sleep_speed_factor: 0.01,
             sleep_time: 0.5,
@@ -168,11 +178,18 @@ impl SustainedSettings {
         }
         for (name, x) in [
             ("rest_gap_fraction", self.rest_gap_fraction),
+            ("pull_gap_fraction", self.pull_gap_fraction),
             ("stabilisation", self.stabilisation),
         ] {
             if !(x > 0.0 && x < 1.0) {
                 return Err(format!("{name} {x} must lie in (0, 1)"));
             }
+        }
+        if self.pull_gap_fraction < self.rest_gap_fraction {
+            return Err(format!(
+                "pull_gap_fraction {} must not be below rest_gap_fraction {}",
+                self.pull_gap_fraction, self.rest_gap_fraction
+            ));
         }
         if self.max_sweeps == 0 {
             return Err("max_sweeps must be at least 1".into());

@@ -126,14 +126,22 @@ impl World {
     }
 
     /// The end-of-step normal speed a held contact of gap `gap` is asked for (module
-    /// documentation of [`crate::sustained`]): β·(g_r − gap)/h toward the rest gap, and on top
+    /// documentation of [`crate::sustained`]): β·(g_r − gap)/h below the rest gap, nothing
+    /// inside the rest band [g_r, g_pull], β·(g_pull − gap)/h above it, and on top
     /// the rest of an overlap (gap < 0) within the nominal step h. Turning within a step
     /// drives a sliding, turning contact (a domino's edge on its neighbour's face) inward by
     /// about ½·ω²·r·h² a step, which the rate β alone would let settle β⁻¹ times deeper.
     fn stabilisation_speed(&self, gap: f64) -> f64 {
         let s = &self.islands.settings;
-        let rest_gap = s.rest_gap_fraction * self.collision_epsilon();
-        (s.stabilisation * (rest_gap - gap) + (1.0 - s.stabilisation) * (-gap).max(0.0)) / s.step
+        let eps = self.collision_epsilon();
+        let rest_gap = s.rest_gap_fraction * eps;
+        let pull_gap = s.pull_gap_fraction * eps;
+        let error = if gap < rest_gap {
+            rest_gap - gap
+        } else {
+            (pull_gap - gap).min(0.0)
+        };
+        (s.stabilisation * error + (1.0 - s.stabilisation) * (-gap).max(0.0)) / s.step
     }
 
     pub(super) fn is_held(&self, pair: (u32, u32)) -> bool {
