@@ -25,7 +25,7 @@ use impulse_reduced::blend::BlendedModel;
 use impulse_reduced::reference::{
     Configuration, FullOptions, FullSim, Load, StaticOptions, solve_statics,
 };
-use impulse_reduced::study::{Fig7Row, curve_at, fig7};
+use impulse_reduced::study::{Fig7Options, Fig7Row, curve_at, fig7};
 use impulse_reduced::{ConstructOptions, MassModel, Mechanism, ReducedModel, ReducedSim, scenes};
 
 use crate::Result;
@@ -343,21 +343,15 @@ pub fn run(out: &Path) -> Result<()> {
         ),
     ];
     for (name, m, direction, loads, samples, tolerance) in studies {
-        let statics = StaticOptions {
-            load_steps: 4,
-            tolerance,
-            ..StaticOptions::default()
+        let settings = Fig7Options {
+            statics: StaticOptions {
+                load_steps: 4,
+                tolerance,
+                ..StaticOptions::default()
+            },
+            ..Fig7Options::default()
         };
-        let (rows, _) = fig7(
-            &m,
-            0,
-            direction,
-            &loads,
-            &samples,
-            &ConstructOptions::default(),
-            &statics,
-        )
-        .map_err(err(name))?;
+        let (rows, _) = fig7(&m, 0, direction, &loads, &samples, &settings).map_err(err(name))?;
         println!(
             "{name}: load N, displacement (full, single, blended), error (single, blended), EE pose error (single, blended)"
         );

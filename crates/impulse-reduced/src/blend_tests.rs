@@ -156,9 +156,11 @@ fn fig7_y_blended_is_exact_at_samples_and_beats_single() {
         dir,
         &loads,
         &samples,
-        &ConstructOptions::default(),
-        &crate::reference::StaticOptions {
-            load_steps: 4,
+        &crate::study::Fig7Options {
+            statics: crate::reference::StaticOptions {
+                load_steps: 4,
+                ..Default::default()
+            },
             ..Default::default()
         },
     )

@@ -112,9 +112,32 @@ pub struct Fig7Row {
     pub blended_pose: f64,
 }
 
+/// Settings of a Fig. 7 sweep ([`fig7`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Fig7Options {
+    /// Construction of every model (rest and samples).
+    pub construct: ConstructOptions,
+    /// The full nonlinear statics (the truth, and the samples' equilibria).
+    pub statics: StaticOptions,
+    /// Shepard exponent p of the blended set (eq. 25); the single model does not blend.
+    pub power: f64,
+}
+
+impl Default for Fig7Options {
+    /// Default construction and statics, and the paper's exponent
+    /// [`crate::blend::SHEPARD_POWER`].
+    fn default() -> Self {
+        Fig7Options {
+            construct: ConstructOptions::default(),
+            statics: StaticOptions::default(),
+            power: crate::blend::SHEPARD_POWER,
+        }
+    }
+}
+
 /// A Fig. 7 sweep: a world force along `direction` at end effector `ee` (index into
 /// `m.end_effectors`), magnitudes `loads` (ascending); extra models built at the full static
-/// equilibria for the magnitudes `samples`. The single model and the blended set are both
+/// equilibria for the magnitudes `samples`, blended with exponent `settings.power`. The single model and the blended set are both
 /// solved under the constant world force (it turns with the end effector in body axes, as in
 /// the paper's simulation), by [`blended_statics`] — the single model as a set of one.
 ///
@@ -126,9 +149,9 @@ pub fn fig7(
     direction: DVec3,
     loads: &[f64],
     samples: &[f64],
-    options: &ConstructOptions,
-    statics: &StaticOptions,
+    settings: &Fig7Options,
 ) -> Result<(Vec<Fig7Row>, Vec<f64>), Error> {
+    let (options, statics) = (&settings.construct, &settings.statics);
     let link = m.end_effectors[ee];
     let rest = Configuration::rest(m);
     let load_of = |s: f64| Load {
@@ -147,7 +170,8 @@ pub fn fig7(
     let rest_ee: Vec<Pose> = m.end_effectors.iter().map(|&e| m.links[e].rest).collect();
     let r = m.bounding_radius();
     let single = BlendedModel::new(vec![models[0].clone()], rest_ee.clone(), r)?;
-    let set = BlendedModel::new(models, rest_ee.clone(), r)?;
+    let mut set = BlendedModel::new(models, rest_ee.clone(), r)?;
+    set.power = settings.power;
     let mut rows = Vec::new();
     let mut warm: Option<StaticSolution> = None;
     let mut start = rest_ee.clone();

@@ -25,16 +25,7 @@ fn fig7_single_model_holds_the_constant_world_force_and_is_plotted_at_its_own_di
     let m = lever(c, length);
     let r = m.bounding_radius();
     let loads = [0.5, 1.0];
-    let (rows, _) = fig7(
-        &m,
-        0,
-        DVec3::Y,
-        &loads,
-        &[],
-        &ConstructOptions::default(),
-        &StaticOptions::default(),
-    )
-    .unwrap();
+    let (rows, _) = fig7(&m, 0, DVec3::Y, &loads, &[], &Fig7Options::default()).unwrap();
     for row in &rows {
         let theta = lever_angle(c * length * row.load);
         let d = lever_displacement(theta, length, r);
