@@ -1,11 +1,11 @@
-//! Blending: exact at samples, eigenstructure kept, repeated eigenvalues, Fig. 7.
+//! Blending: exact at samples, eigenstructure kept, repeated eigenvalues (Fig. 7 is in
+//! `study_tests.rs`).
 
 use faer::Mat;
 use glam::DVec3;
 
 use super::*;
 use crate::construct::ConstructOptions;
-use crate::study::fig7;
 use crate::testutil::{lever, lever_angle, max_abs, rng};
 
 /// Interpolation at a sample point and blends of equal matrices are exact to rounding.
@@ -142,44 +142,6 @@ fn rank1_blend_keeps_eigenvalues_of_rotated_matrices() {
     println!("rotated blend vs R(π/10): {err:e} (element-wise average: {elementwise:.3})");
     assert!(err <= EXACT_REL * 10.0);
     assert!(elementwise > 0.05);
-}
-
-#[test]
-fn fig7_y_blended_is_exact_at_samples_and_beats_single() {
-    let m = crate::scenes::y_shape(4).build().unwrap();
-    let dir = DVec3::new(1.0, 0.0, 0.0);
-    let loads: Vec<f64> = (1..=12).map(|k| 40.0 * k as f64).collect();
-    let samples = [120.0, 240.0, 360.0, 480.0];
-    let (rows, _) = fig7(
-        &m,
-        0,
-        dir,
-        &loads,
-        &samples,
-        &ConstructOptions::default(),
-        &crate::reference::StaticOptions {
-            load_steps: 4,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    for r in &rows {
-        println!(
-            "load {:6.1} N: displacement {:.3}, single {:.3e}, blended {:.3e}, EE pose error single {:.2e} blended {:.2e}",
-            r.load, r.displacement, r.single, r.blended, r.single_pose, r.blended_pose
-        );
-    }
-    for r in rows.iter().filter(|r| samples.contains(&r.load)) {
-        assert!(r.blended <= 1e-9, "sample {}: {}", r.load, r.blended);
-    }
-    let single: f64 = rows.iter().map(|r| r.single).sum();
-    let blended: f64 = rows.iter().map(|r| r.blended).sum();
-    println!(
-        "mean constraint error: single {:.3e}, blended {:.3e}",
-        single / rows.len() as f64,
-        blended / rows.len() as f64
-    );
-    assert!(blended <= single / 3.0);
 }
 
 #[test]

@@ -1,4 +1,5 @@
-//! Fig. 7 study against the closed-form lever (`testutil::lever`).
+//! Fig. 7 study: the statics against the closed-form lever (`testutil::lever`); the "Y" and
+//! the ladder against the paper's band and issue 14's acceptance for the blend.
 
 use glam::DVec3;
 
@@ -8,6 +9,154 @@ use crate::testutil::{lever, lever_angle};
 /// Agreement of the statics with the lever's closed form (rad and scaled twist norms): the
 /// fixed point stops at `tol::BLEND_STATIC_TOLERANCE` and the full Newton at its residual.
 const CLOSED_FORM_TOL: f64 = 1e-9;
+
+/// Blended relative constraint error allowed at a sample point: there the blend is that
+/// sample's model, whose static solution is the full one (issue 14: "zero at sample points
+/// (≤ 1e-9)"); measured ≤ 6.5e-13 on the "Y" and ≤ 1.2e-13 on the ladder (the ladder's full
+/// solves stop at [`LADDER_STATIC_TOLERANCE`]).
+const EXACT_AT_SAMPLE: f64 = 1e-9;
+
+/// How far the ladder's single-model reading at displacement 1 may pass the top of
+/// [`PAPER_SINGLE_BAND`] (fraction of it): the 4% (0.156) explained in the module doc of
+/// `study` (our ladder's proportions and joints are not the paper's, which gives neither),
+/// rounded up to 5%.
+const LADDER_BAND_EXCESS: f64 = 0.05;
+
+/// Newton tolerance of the ladder's full solves (relative): with 19 loops the
+/// finite-difference tangent stalls between 1e-9 and 1e-8 of the force scale at the larger
+/// loads (as `LADDER_STATIC_TOLERANCE` in `xtask/src/forks.rs`).
+const LADDER_STATIC_TOLERANCE: f64 = 1e-7;
+
+/// Parts each span between samples is split into for the sweep (4: quarter points and the
+/// midpoint, where the blend is weakest).
+const PARTS: usize = 4;
+
+/// Parts the span from rest to the first sample is split into: finer than [`PARTS`], so that
+/// rows fall on both sides of [`NEAR_REST_DISPLACEMENT`] when the first sample is not near
+/// rest (there the blend is up to 3.4 times worse than the single model).
+const NEAR_REST_PARTS: usize = 8;
+
+/// The "Y"'s first sample (N): relative displacement 0.057, near rest (see
+/// [`NEAR_REST_DISPLACEMENT`]); seven samples reach 455.6 N (displacement 0.77).
+const Y_FIRST_SAMPLE: f64 = 40.0;
+
+/// Samples of the "Y" study.
+const Y_SAMPLES: usize = 7;
+
+/// Loads (N) beyond the "Y"'s last sample, up to where its single model's own displacement
+/// passes 1 (at ~700 N), for the reading in the paper's band.
+const Y_TAIL: [f64; 7] = [480.0, 520.0, 560.0, 600.0, 640.0, 680.0, 720.0];
+
+/// The ladder's first sample (N): relative displacement 0.042, near rest; nine samples reach
+/// 102.5 N (displacement 0.92).
+const LADDER_FIRST_SAMPLE: f64 = 4.0;
+
+/// Samples of the ladder study.
+const LADDER_SAMPLES: usize = 9;
+
+/// Loads (N) beyond the ladder's last sample, up to where its single model's own displacement
+/// passes 1 (at ~155 N).
+const LADDER_TAIL: [f64; 6] = [110.0, 120.0, 130.0, 140.0, 150.0, 160.0];
+
+/// Runs a Fig. 7 sweep of `m` (force along `direction` on the first end effector) with samples
+/// `first · FIG7_SAMPLE_RATIOᵏ` and the study's exponent, on the subdivided sample spans (the
+/// first finer) and `tail`; checks issue 14's acceptance and returns the rows.
+fn check_fig7(
+    name: &str,
+    m: &Mechanism,
+    direction: DVec3,
+    (first, count): (f64, usize),
+    tail: &[f64],
+    tolerance: f64,
+    band_top: f64,
+) -> Vec<Fig7Row> {
+    let samples = geometric(first, FIG7_SAMPLE_RATIO, count);
+    let mut loads = subdivide(&samples, PARTS);
+    loads.extend(subdivide(&samples[..1], NEAR_REST_PARTS));
+    loads.extend_from_slice(tail);
+    loads.sort_by(f64::total_cmp);
+    loads.dedup();
+    let settings = Fig7Options {
+        statics: StaticOptions {
+            load_steps: 4,
+            tolerance,
+            ..StaticOptions::default()
+        },
+        ..Fig7Options::default()
+    };
+    let (rows, _) = fig7(m, 0, direction, &loads, &samples, &settings).unwrap();
+    for r in &rows {
+        println!(
+            "{name} {:8.3} N: displacement {:.4} (single {:.4}), single {:.4e}, blended {:.4e}, ratio {:.4}",
+            r.load,
+            r.displacement,
+            r.single_displacement,
+            r.single,
+            r.blended,
+            r.blended / r.single
+        );
+    }
+    // Zero at the samples.
+    for r in rows.iter().filter(|r| samples.contains(&r.load)) {
+        assert!(
+            r.blended <= EXACT_AT_SAMPLE,
+            "{name}: sample {} N: {:e}",
+            r.load,
+            r.blended
+        );
+    }
+    // A third of the single model's error, load by load, over the sampled range.
+    let (load, ratio) = worst_blend_ratio(&rows, &samples, NEAR_REST_DISPLACEMENT).unwrap();
+    println!("{name}: worst blended / single over the sampled range {ratio:.4} at {load} N");
+    assert!(ratio <= FIG7_BLEND_RATIO, "{name}: {ratio} at {load} N");
+    // The single model at its own relative displacement 1: the paper's band.
+    let at1 = curve_at(&rows, |r| r.single_displacement, |r| r.single, 1.0).unwrap();
+    println!("{name}: single model at displacement 1: {at1:.4} (paper {PAPER_SINGLE_BAND:?})");
+    assert!(
+        (PAPER_SINGLE_BAND.0..=band_top).contains(&at1),
+        "{name}: {at1}"
+    );
+    rows
+}
+
+#[test]
+fn fig7_y_single_in_the_band_blend_exact_at_samples_and_a_third_of_single_between() {
+    let m = crate::scenes::y_shape(4).build().unwrap();
+    check_fig7(
+        "y",
+        &m,
+        DVec3::X,
+        (Y_FIRST_SAMPLE, Y_SAMPLES),
+        &Y_TAIL,
+        crate::tol::STATIC_RESIDUAL_REL,
+        PAPER_SINGLE_BAND.1,
+    );
+}
+
+#[test]
+fn fig7_ladder_single_near_the_band_blend_exact_at_samples_and_a_third_of_single_between() {
+    // Pulled out of its plane (in it the rung hinges lock every level).
+    let m = crate::scenes::ladder(36).build().unwrap();
+    check_fig7(
+        "ladder-36",
+        &m,
+        DVec3::Y,
+        (LADDER_FIRST_SAMPLE, LADDER_SAMPLES),
+        &LADDER_TAIL,
+        LADDER_STATIC_TOLERANCE,
+        PAPER_SINGLE_BAND.1 * (1.0 + LADDER_BAND_EXCESS),
+    );
+}
+
+#[test]
+fn subdivided_loads_split_every_sample_span_evenly() {
+    // Exact in binary: every value is a multiple of 1/4 below 2^53.
+    assert_eq!(geometric(4.0, 1.5, 3), vec![4.0, 6.0, 9.0]);
+    assert_eq!(
+        subdivide(&[4.0, 6.0, 9.0], 2),
+        vec![2.0, 4.0, 5.0, 6.0, 7.5, 9.0]
+    );
+}
 
 /// The lever's scaled displacement `‖(v/r, ω/π)‖` at angle θ: the body twist of a rotation θ
 /// about the hinge `length` behind the link's origin is θ·(0, length, 0; 0, 0, 1).
@@ -25,16 +174,7 @@ fn fig7_single_model_holds_the_constant_world_force_and_is_plotted_at_its_own_di
     let m = lever(c, length);
     let r = m.bounding_radius();
     let loads = [0.5, 1.0];
-    let (rows, _) = fig7(
-        &m,
-        0,
-        DVec3::Y,
-        &loads,
-        &[],
-        &ConstructOptions::default(),
-        &StaticOptions::default(),
-    )
-    .unwrap();
+    let (rows, _) = fig7(&m, 0, DVec3::Y, &loads, &[], &Fig7Options::default()).unwrap();
     for row in &rows {
         let theta = lever_angle(c * length * row.load);
         let d = lever_displacement(theta, length, r);
