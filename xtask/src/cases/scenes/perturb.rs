@@ -188,3 +188,12 @@ fn chute_fails_with_sticky_caps() {
         d.duration = Some(1.5);
     });
 }
+
+/// The plank bridge guards that the bridge stands: with the right block moved out from under
+/// the plank's end, the plank tips off it.
+#[test]
+fn plank_bridge_fails_without_its_second_support() {
+    fails("plank-bridge", "bridge_stands", |d| {
+        body(d, "right").position[0] = 0.36;
+    });
+}
