@@ -576,18 +576,9 @@ impl World {
             let mut s = 1.0_f64;
             for range in &patches {
                 let (c0, c) = (&contacts[range.clone()], &solved.1[range.clone()]);
-                // A patch separating at the start faster than its target asks is coming
-                // down within the step (a ball rolling on a rocking plank), not pressing from
-                // its start: sliding friction acts only later in the step, the fraction below is
-                // no stop time, and a step cut to it would press not at all and leave the slip
-                // for the next step to cut again: no stop time to locate.
-                let pressing = c0.iter().any(|c| {
-                    normal_speed(&after_jolt, c) <= c.target_normal_velocity.max(0.0) + slip_tol
-                });
-                let slipping = pressing
-                    && c0
-                        .iter()
-                        .any(|c| tangential_speed(&after_jolt, c) > slip_tol);
+                let slipping = c0
+                    .iter()
+                    .any(|c| tangential_speed(&after_jolt, c) > slip_tol);
                 let sticks = c.iter().all(|c| {
                     c.impulse.truncate().length() < STICK_FRACTION * c.friction * c.impulse.z
                 });
