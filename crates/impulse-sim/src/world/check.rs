@@ -200,8 +200,23 @@ impl World {
 
     /// A check plus a conservative time-of-impact bound (absolute time); no response. Used
     /// for pairs that are not at the top of the heap (new pairs, re-keyed pairs).
+    ///
+    /// In the switching model a pair found within ε_c that would be held is due now: bodies
+    /// placed touching (or a pair re-keyed while resting) are in sustained contact from this
+    /// instant. Its time-of-impact bound would only bring it to the top once the gap had
+    /// closed further, and bodies that fall together (a stack placed with small gaps) have
+    /// no relative motion until the one below stops: they would land one after another as
+    /// collisions, each making its island take a cold impulsive solve.
     pub(super) fn bound(&mut self, pair: (u32, u32)) -> f64 {
         let scan = self.query(pair);
+        if scan.distance < self.collision_epsilon() {
+            if let Some(n) = scan.normal {
+                let mid = 0.5 * (scan.point_a + scan.point_b);
+                if self.holds(pair, mid, n) {
+                    return self.time;
+                }
+            }
+        }
         self.key_for(pair, &scan, false)
     }
 
