@@ -121,7 +121,9 @@ impl World {
         moving.clear();
         for (i, slot) in self.slots.iter().enumerate() {
             let Some(b) = &slot.body else { continue };
-            if b.kind == BodyKind::Fixed {
+            // A sleeping body does not move: its box in the hash stays the one it fell asleep
+            // with, as a fixed body's does.
+            if b.kind == BodyKind::Fixed || b.asleep {
                 continue;
             }
             let motion = b.motion(g);
@@ -213,8 +215,9 @@ impl World {
     fn advance_bodies(&mut self, dt: f64) -> Result<(), SimError> {
         let (g, integ) = (self.gravity, self.integrator);
         // With a pool set by `set_threads`, always go parallel (the determinism check needs
-        // the parallel path); on the global pool, only when there is enough work.
-        let serial = self.pool.is_none() && self.slots.len() < PARALLEL_MIN_BODIES;
+        // the parallel path); on the global pool, only when enough bodies move (this step's
+        // moving bodies: sleeping and fixed ones have nothing to advance).
+        let serial = self.pool.is_none() && self.moving.len() < PARALLEL_MIN_BODIES;
         let step = |b: &mut Body| b.advance(dt, g, &integ).err().map(|e| e.to_string());
         let run = |slots: &mut [super::Slot]| -> Vec<Option<String>> {
             if serial {
