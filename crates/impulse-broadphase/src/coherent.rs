@@ -451,6 +451,13 @@ impl CoherentHash {
         sorted_pairs(new)
     }
 
+    /// Whether some pair's closeness changed since the last
+    /// [`take_new_close_pairs`](Self::take_new_close_pairs) (then that call has work to do).
+    #[must_use]
+    pub fn has_pending_changes(&self) -> bool {
+        !self.table.changed.is_empty()
+    }
+
     /// Operation counts since creation or the last [`reset_work`](Self::reset_work).
     pub fn work(&self) -> WorkCounters {
         self.table.work

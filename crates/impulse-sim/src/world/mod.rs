@@ -329,6 +329,10 @@ pub(crate) struct Faults {
     pub toi_scale: f64,
     /// The response fails on this pair (slot indices, either order).
     pub fail_pair: Option<(u32, u32)>,
+    /// `step_until` never takes its quiet path (a world at rest stepped by the loop).
+    pub no_quiet_path: bool,
+    /// How many `step_until` calls took the quiet path.
+    pub quiet_calls: u64,
 }
 
 #[cfg(test)]
@@ -337,6 +341,8 @@ impl Default for Faults {
         Self {
             toi_scale: 1.0,
             fail_pair: None,
+            no_quiet_path: false,
+            quiet_calls: 0,
         }
     }
 }
@@ -716,3 +722,6 @@ impl World {
 
 #[cfg(test)]
 mod island_tests;
+
+#[cfg(test)]
+mod step_tests;

@@ -1,0 +1,92 @@
+//! Tests of `step_until` itself: the quiet path a world at rest takes.
+
+use glam::DVec3;
+
+use crate::scene::{BodyDesc, ShapeDesc};
+use crate::world::{World, WorldSettings};
+
+/// Polling rate of the quiet-path test (calls of `step_until` per simulated second), as a
+/// program drawing frames would call it.
+const POLL_RATE: f64 = 100.0;
+
+/// A stack of four blocks placed in contact, which sleeps, polled at [`POLL_RATE`] for 2 s;
+/// then a ball added just above it lands on it and wakes it, and the run goes on to 3 s.
+/// With the quiet path (calls while nothing moves and nothing is due only move the clock)
+/// every body's final state, the clock and the loop's counters are bit for bit those of the
+/// same run stepped by the event loop at every call, and the quiet path was taken for most
+/// of the sleeping second.
+#[test]
+fn a_world_at_rest_steps_exactly_as_the_loop_would() {
+    let run = |quiet: bool| {
+        let mut settings = WorldSettings::new(1e-4);
+        settings.default_contact.friction = 0.5;
+        settings.default_contact.restitution = 0.3;
+        let mut world = World::new(settings).expect("valid settings");
+        world.faults.no_quiet_path = !quiet;
+        world
+            .add_body(
+                &BodyDesc::fixed("floor", ShapeDesc::cuboid([0.5, 0.5, 0.05]))
+                    .at([0.0, 0.0, -0.05]),
+            )
+            .expect("free space");
+        let h = 0.05;
+        for k in 0..4 {
+            world
+                .add_body(
+                    &BodyDesc::new(format!("block{k}"), ShapeDesc::cuboid([h, h, h]))
+                        .at([0.0, 0.0, h + 2.0 * h * f64::from(k)])
+                        .with_density(700.0),
+                )
+                .expect("free space");
+        }
+        let mut k = 1u32;
+        let mut poll_to = |world: &mut World, end: f64| {
+            while f64::from(k) / POLL_RATE <= end {
+                world.step_until(f64::from(k) / POLL_RATE).expect("runs");
+                k += 1;
+            }
+        };
+        poll_to(&mut world, 2.0);
+        assert!(
+            world
+                .bodies()
+                .all(|(_, b)| !b.is_dynamic() || b.is_asleep()),
+            "the stack sleeps by 2 s"
+        );
+        world
+            .add_body(
+                &BodyDesc::new("ball", ShapeDesc::sphere(0.03))
+                    .at([0.01, 0.0, 8.0 * h + 0.05])
+                    .with_density(2000.0),
+            )
+            .expect("free space");
+        poll_to(&mut world, 3.0);
+        world
+    };
+    let (quiet, loop_only) = (run(true), run(false));
+    assert!(
+        quiet.faults.quiet_calls >= 100,
+        "quiet path taken {} times",
+        quiet.faults.quiet_calls
+    );
+    assert_eq!(loop_only.faults.quiet_calls, 0);
+    assert_eq!(quiet.time().to_bits(), loop_only.time().to_bits());
+    assert_eq!(quiet.counters(), loop_only.counters());
+    let woken = quiet
+        .bodies()
+        .any(|(_, b)| b.is_dynamic() && !b.is_asleep())
+        || quiet.counters().sleeps > 1;
+    assert!(woken, "the ball woke the stack");
+    for ((_, a), (_, b)) in quiet.bodies().zip(loop_only.bodies()) {
+        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+        assert_eq!(
+            bits(a.pose.translation),
+            bits(b.pose.translation),
+            "{}",
+            a.name
+        );
+        assert_eq!(bits(a.velocity), bits(b.velocity), "{}", a.name);
+        assert_eq!(bits(a.omega), bits(b.omega), "{}", a.name);
+        assert_eq!(a.is_asleep(), b.is_asleep(), "{}", a.name);
+    }
+}
