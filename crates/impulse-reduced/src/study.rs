@@ -73,6 +73,48 @@
 //! set of one), so they differ only by the blending; [`Fig7Row::displacement`] keeps the full
 //! model's displacement for the pose-error columns, and [`curve_at`] reads a curve at a given
 //! displacement of its own.
+//!
+//! # Mid-way between samples the blend is worse than either neighbour (open)
+//!
+//! At the midpoint of two samples the blend's constraint error exceeds that of either
+//! neighbouring model used alone (each solved as a set of one under the same load). Measured
+//! at the "Y" midpoint 253.125 N (samples 202.5 and 303.75 N, p = 4, the study's seven samples
+//! and the rest model) and the ladder-36 midpoint 85.43 N (samples 68.3 and 102.5 N):
+//!
+//! | | "Y" 253.1 N | ladder-36 85.4 N |
+//! |---|---|---|
+//! | neighbour below, alone | 1.06e-3 | 2.19e-3 |
+//! | neighbour above, alone | 1.13e-3 | 1.66e-3 |
+//! | blended set | 5.28e-3 | 1.01e-2 |
+//! | the two neighbours only, blended | 1.66e-3 | — |
+//!
+//! **Not the pose averaging of eqs. 26–28.** With the end effectors put at the full
+//! solution's poses, averaging each model's internal-link poses with the same weights in the
+//! log chart of the *true* pose instead of the closest model's gives 4.018e-3 against eq. 28's
+//! 4.012e-3 on the "Y". There, eq. 28 between the two neighbours alone does what it should:
+//! 1.10e-3, below either neighbour's links (2.16e-3 and 1.22e-3); all eight models give 4.01e-3.
+//!
+//! **The per-model wrench of Algorithm 4, `ᵉw⁽ⁱ⁾ = K⁽ⁱ⁾ ξ_e⁽ⁱ⁾`.** A loaded model has a
+//! near-rigid end-effector direction that the rest model does not have (ladder: rank 2 at
+//! rest, 3 under load; "Y": 11 and 12, the twelfth compliance eigenvalue 4.6e-10 at 40 N,
+//! 8.3e-8 at 455.6 N against 9e-3 for the largest), so `K⁽ⁱ⁾` reaches ~2e9. The blended end
+//! effector's offset from model i's reference has a component along that direction which
+//! model i's own statics would never produce, and `K⁽ⁱ⁾` turns it into wrenches of
+//! 4.3e6 N ("Y", 40 N model) and 7.8e5 N (ladder, 4 N model) against loads of 253 and 85 N.
+//! Placed at the blended end effector, the far models' internal links then violate the
+//! joints by 1.28 ("Y", 40 N model) and 17.7 (ladder, 4 N model), so their Shepard weights of
+//! 3e-4 to 2e-3 (p = 4) still add most of the blend's error: Σ αᵢ·(error of model i's links)
+//! over the non-neighbours is ≈ 1.2e-2 on the ladder against the blend's 1.01e-2. The
+//! neighbours are hit too, less: the model below, alone, at the blended end effector reads
+//! 4.56e-3 on the "Y" (1.06e-3 at its own equilibrium).
+//!
+//! Tried and not enough: giving every model the blended spring wrench less its own bias,
+//! `K̄ ξ̄ + b̄ − b⁽ⁱ⁾` (no `K⁽ⁱ⁾` amplification; each model's links are then as good as
+//! 5e-4 of the truth on the "Y", but they no longer meet the end effector): 3.73e-3 on the
+//! "Y", 8.06e-3 on the ladder. Dropping the near-rigid directions from `K⁽ⁱ⁾` (inverting
+//! each model's compliance at the rest model's rank only; ad hoc, still exact at the samples):
+//! 3.25e-3 and 6.47e-3 at the midpoints, 4.1e-4 to 1.3e-3 (now 5.9e-4 to 1.5e-3) at the
+//! quarter points — better, still three times the neighbours.
 
 use glam::DVec3;
 use impulse_geom::Pose;
