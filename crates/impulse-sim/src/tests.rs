@@ -102,6 +102,7 @@ fn recording_is_deterministic_across_thread_counts() {
     for threads in [1, 2] {
         let mut w = world(ron);
         w.set_threads(threads).unwrap();
+        w.set_parallel_min_bodies(0);
         let rec = run(&mut w, 0.5, 100.0, |_| {}).unwrap();
         assert_eq!(rec.frames.len(), 51);
         hashes.push(rec.hash());

@@ -586,6 +586,7 @@ fn switching_runs_are_deterministic_across_thread_counts() {
     let hash = |threads: usize| {
         let mut world = world_of(desc.clone());
         world.set_threads(threads).expect("pool");
+        world.set_parallel_min_bodies(0);
         crate::record::run(&mut world, 1.0, 200.0, |_| {})
             .expect("runs")
             .hash()

@@ -5,10 +5,7 @@ use impulse_broadphase::BroadphaseError;
 use impulse_collide::Motion;
 use rayon::prelude::*;
 
-use super::{
-    Counters, MAX_CHECKS_WITHOUT_PROGRESS, MAX_STALLS_PER_INSTANT, PARALLEL_MIN_BODIES, StepReport,
-    World,
-};
+use super::{Counters, MAX_CHECKS_WITHOUT_PROGRESS, MAX_STALLS_PER_INSTANT, StepReport, World};
 use crate::body::{Body, BodyKind};
 use crate::error::SimError;
 
@@ -267,10 +264,9 @@ impl World {
 
     fn advance_bodies(&mut self, dt: f64) -> Result<(), SimError> {
         let (g, integ) = (self.gravity, self.integrator);
-        // With a pool set by `set_threads`, always go parallel (the determinism check needs
-        // the parallel path); on the global pool, only when enough bodies move (this step's
-        // moving bodies: sleeping and fixed ones have nothing to advance).
-        let serial = self.pool.is_none() && self.moving.len() < PARALLEL_MIN_BODIES;
+        // Parallel only when enough bodies move (this step's moving bodies: sleeping and
+        // fixed ones have nothing to advance), on the world's pool or rayon's global one.
+        let serial = self.moving.len() < self.parallel_min_bodies;
         let step = |b: &mut Body| b.advance(dt, g, &integ).err().map(|e| e.to_string());
         let run = |slots: &mut [super::Slot]| -> Vec<Option<String>> {
             if serial {
@@ -285,9 +281,16 @@ impl World {
                     .collect()
             }
         };
+        // A serial step never enters the pool: `install` alone waits on the pool's thread.
         let errors = match &self.pool {
-            Some(pool) => pool.install(|| run(&mut self.slots)),
-            None => run(&mut self.slots),
+            Some(pool) if !serial => {
+                #[cfg(test)]
+                {
+                    self.faults.pool_steps += 1;
+                }
+                pool.install(|| run(&mut self.slots))
+            }
+            _ => run(&mut self.slots),
         };
         if let Some((i, e)) = errors
             .into_iter()

@@ -367,6 +367,8 @@ pub(super) fn determinism() -> Result<Vec<Metric>, String> {
     for threads in [1, 2] {
         let mut world = impulse_sim::World::from_scene(&scene).map_err(|e| e.to_string())?;
         world.set_threads(threads).map_err(|e| e.to_string())?;
+        // Every step on the pool: the parallel path is what this checks.
+        world.set_parallel_min_bodies(0);
         let rec =
             run(&mut world, 0.5, scene.desc.output_rate, |_| {}).map_err(|e| e.to_string())?;
         hashes.push(rec.hash());
