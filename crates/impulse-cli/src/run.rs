@@ -169,8 +169,15 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
     let _ = match scene.desc.contact_model {
         ContactMode::Switching => writeln!(
             s,
-            "contact model:    switching: {} island steps, {} impulsive island solves, {} islands put to sleep",
-            c.island_steps, c.transients, c.sleeps
+            "contact model:    switching: {} island steps, {} impulsive island solves, {} islands put to sleep\n\
+             contact solver:   {} solves, {} sweeps, {} stopped unconverged at the sweep cap, {} direct solves accepted",
+            c.island_steps,
+            c.transients,
+            c.sleeps,
+            c.island_solves,
+            c.island_sweeps,
+            c.unconverged_solves,
+            c.direct_solves
         ),
         ContactMode::Impulse => writeln!(s, "contact model:    impulse"),
     };

@@ -638,15 +638,21 @@ impl World {
         }
     }
 
+    /// Solves an island's contacts and counts what the solve did.
     fn solve(
-        &self,
+        &mut self,
         bodies: &mut [IslandBody],
         contacts: &mut [Contact],
         solver: &SolverSettings,
     ) -> Result<(), SimError> {
-        solve_contacts(bodies, contacts, solver)
-            .map(|_| ())
-            .map_err(|e| self.runtime(format!("island contact solve: {e}")))
+        let report = solve_contacts(bodies, contacts, solver)
+            .map_err(|e| self.runtime(format!("island contact solve: {e}")))?;
+        let c = &mut self.counters;
+        c.island_solves += 1;
+        c.island_sweeps += report.iterations as u64;
+        c.unconverged_solves += u64::from(!report.converged);
+        c.direct_solves += u64::from(report.direct);
+        Ok(())
     }
 
     /// Puts an island to sleep when all its bodies have moved slower than the sleep speed for

@@ -706,3 +706,41 @@ fn energy_never_rises_beyond_the_stabilisation_bound() {
         );
     }
 }
+
+/// The solver counters report what the island solves did. With the sweep cap at one sweep
+/// every solve is exactly one sweep, and a stack of four blocks placed touching (asked to
+/// open to the rest gap) cannot be solved in one: solves are counted unconverged. With the
+/// default cap the same stack has no unconverged solve, and more sweeps than solves.
+#[test]
+fn solver_counters_count_sweeps_and_unconverged_solves() {
+    let run = |max_sweeps: usize| {
+        let mut settings = WorldSettings::new(1e-4);
+        settings.sustained.max_sweeps = max_sweeps;
+        let mut world = World::new(settings).expect("valid settings");
+        world
+            .add_body(
+                &BodyDesc::fixed("floor", ShapeDesc::cuboid([0.5, 0.5, 0.05]))
+                    .at([0.0, 0.0, -0.05]),
+            )
+            .expect("free space");
+        let h = 0.05;
+        for k in 0..4 {
+            world
+                .add_body(
+                    &BodyDesc::new(format!("block{k}"), ShapeDesc::cuboid([h, h, h]))
+                        .at([0.0, 0.0, h + 2.0 * h * f64::from(k)])
+                        .with_density(700.0),
+                )
+                .expect("free space");
+        }
+        world.step_until(0.2).expect("runs").counters
+    };
+    let capped = run(1);
+    assert!(capped.island_solves >= capped.island_steps && capped.island_steps > 100);
+    assert_eq!(capped.island_sweeps, capped.island_solves);
+    assert!(capped.unconverged_solves > 0, "{capped:?}");
+    assert_eq!(capped.direct_solves, 0);
+    let free = run(SustainedSettings::default().max_sweeps);
+    assert_eq!(free.unconverged_solves, 0, "{free:?}");
+    assert!(free.island_sweeps > free.island_solves, "{free:?}");
+}

@@ -151,6 +151,18 @@ pub struct Counters {
     pub transients: u64,
     /// Islands put to sleep.
     pub sleeps: u64,
+    /// Contact solves of the islands: each island step's solve, its re-solves while it
+    /// locates a slip → stick transition, and the impulsive solves of transients.
+    pub island_solves: u64,
+    /// Gauss–Seidel sweeps over all island solves.
+    pub island_sweeps: u64,
+    /// Island solves that stopped at the sweep cap ([`SustainedSettings::max_sweeps`]) short
+    /// of the solver tolerance: their impulses are the last sweep's, not a solution. Many of
+    /// them mark a scene the switching model runs slowly (a wall of bricks placed touching,
+    /// the settling pyramid: `docs/sustained-contact.md`, Open).
+    pub unconverged_solves: u64,
+    /// Direct solves on the sweeps' active set that were accepted.
+    pub direct_solves: u64,
 }
 
 /// One resolved contact ([`World::contacts`], [`World::set_event_log`]).

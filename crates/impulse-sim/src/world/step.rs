@@ -375,5 +375,9 @@ fn difference(a: &Counters, b: &Counters) -> Counters {
         island_steps: a.island_steps - b.island_steps,
         transients: a.transients - b.transients,
         sleeps: a.sleeps - b.sleeps,
+        island_solves: a.island_solves - b.island_solves,
+        island_sweeps: a.island_sweeps - b.island_sweeps,
+        unconverged_solves: a.unconverged_solves - b.unconverged_solves,
+        direct_solves: a.direct_solves - b.direct_solves,
     }
 }
