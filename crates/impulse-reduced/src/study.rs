@@ -170,7 +170,12 @@
 //! 4.56e-3 and 3.68e-3. Placing the end effector at the full solution's pose does not cure
 //! it (8.7e-3 on the "Y", two nearest), and there even a quarter point reads 2.5e-3: what is
 //! left is Algorithm 4's `K⁽ⁱ⁾` amplification in each neighbour's near-rigid direction,
-//! above.
+//! above. The own-wrench variant above (`K̄ ξ̄ + b̄ − b⁽ⁱ⁾` for each model) trades one error
+//! for the other with the two nearest models too: its links are as close to the full
+//! solution as the end effector (253.1 N: 7.92e-4 against 1.73e-2; ladder 85.4 N: 2.80e-3
+//! against 5.45e-3) but, no longer meeting the end effector, its constraint error grows
+//! (253.1 N: 1.70e-3 → 3.06e-3, 379.7 N: 3.06e-3 → 7.43e-3, ladder 85.4 N: 1.86e-3 →
+//! 6.03e-3), so Algorithm 4 stays as it is.
 
 use glam::DVec3;
 use impulse_geom::Pose;
