@@ -11,7 +11,8 @@
 //!   and blended, for the "Y" and the ladder, each curve against its own end effector's
 //!   displacement (as in the paper), with each curve read at displacement 1 and the blend's
 //!   worst ratio to the single model load by load over the sampled range (issue 14's
-//!   acceptance: a third; Shepard p and samples as in `impulse_reduced::study`); written as
+//!   acceptance: a third; Shepard p, the models carrying weight and the samples as in
+//!   `impulse_reduced::study`); written as
 //!   `fig7-<name>.csv` and `fig7-<name>.svg`. The same rows give reduced-vs-full end-effector
 //!   pose error at equal loads (the full solution's displacement is a column too).
 //!
@@ -28,7 +29,7 @@ use impulse_reduced::reference::{
     Configuration, FullOptions, FullSim, Load, StaticOptions, solve_statics,
 };
 use impulse_reduced::study::{
-    FIG7_BLEND_RATIO, FIG7_SAMPLE_RATIO, FIG7_SHEPARD_POWER, Fig7Options, Fig7Row,
+    FIG7_BLEND_RATIO, FIG7_SAMPLE_RATIO, FIG7_SHEPARD_POWER, FIG7_SUPPORT, Fig7Options, Fig7Row,
     NEAR_REST_DISPLACEMENT, PAPER_SINGLE_BAND, curve_at, fig7, geometric, subdivide,
     worst_blend_ratio,
 };
@@ -337,8 +338,11 @@ pub fn run(out: &Path) -> Result<()> {
     println!(
         "(paper: single model {}–{} at displacement 1; blended zero at the samples; issue 14: \
          blended ≤ {FIG7_BLEND_RATIO:.3} of single at every load of the sampled range; Shepard \
-         p = {FIG7_SHEPARD_POWER}, samples × {FIG7_SAMPLE_RATIO} from near rest)",
-        PAPER_SINGLE_BAND.0, PAPER_SINGLE_BAND.1
+         p = {FIG7_SHEPARD_POWER}, models carrying weight {}, samples × {FIG7_SAMPLE_RATIO} \
+         from near rest)",
+        PAPER_SINGLE_BAND.0,
+        PAPER_SINGLE_BAND.1,
+        FIG7_SUPPORT.map_or_else(|| "all".to_owned(), |k| format!("the {k} nearest"))
     );
     // The ladder's full solves stop at LADDER_STATIC_TOLERANCE (see there).
     let studies: [Study; 2] = [

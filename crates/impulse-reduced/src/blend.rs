@@ -3,7 +3,9 @@
 //! - **Weights** (eq. 25): `α_i ∝ (Σ_e ‖ξ_e − ξ_e⁽ⁱ⁾‖)^(−p)`, p = 2, with ξ the end-effector
 //!   displacement from rest (linear part over the bounding radius r, angular over π).
 //!   **\[fix\]** at a sample point the distance is zero: that model gets weight 1, so the blend
-//!   interpolates the samples exactly.
+//!   interpolates the samples exactly. **\[choose\]** optionally with compact support
+//!   ([`BlendedModel::support`], [`compact_shepard_weights`]): only the k nearest models carry
+//!   weight, continuously; the paper's weights ([`SUPPORT`] = `None`) are the default.
 //! - **Matrices** (Algorithm 3, §7.5): the *inverse* matrices (compliance, accelerability,
 //!   damping compliance) are blended — zero in a lower-rank model's inadmissible directions —
 //!   by their eigenstructure, then inverted by truncated SVD at the rank of the closest model.
@@ -81,6 +83,55 @@ pub fn shepard_weights(distances: &[f64], power: f64) -> Vec<f64> {
     raw.iter().map(|x| x / s).collect()
 }
 
+/// Models that may carry weight in a blend (eq. 25 with compact support, see
+/// [`compact_shepard_weights`]); `None`, the library's default, blends every model as the
+/// paper does. The Fig. 7 study sets [`crate::study::FIG7_SUPPORT`].
+pub const SUPPORT: Option<usize> = None;
+
+/// Shepard weights (eq. 25) restricted to the `support` nearest models, continuously: with R
+/// the distance of the (`support` + 1)-th nearest model, model i gets
+/// `(1/dᵢ − 1/R)₊^p = dᵢ^(−p) · (1 − dᵢ/R)₊^p` (Franke and Nielson's modified Shepard weight:
+/// eq. 25's weight times a cutoff that vanishes at R), then the weights are normalised.
+///
+/// - A zero distance takes all the weight, as in [`shepard_weights`]: exact at the samples.
+/// - Continuous in the end-effector poses wherever the nearest model is strictly closer than
+///   R: R (an order statistic of continuous distances) is continuous, and a model entering or
+///   leaving the `support` nearest does so at distance R, where its weight is zero.
+/// - Where the nearest model is as far as R (`support` + 1 models tied for nearest) every
+///   weight vanishes; the tied nearest models then share the weight equally (the only
+///   discontinuity, on a set of measure zero).
+/// - With `support` at least the number of models there is no cutoff: [`shepard_weights`].
+#[must_use]
+pub fn compact_shepard_weights(distances: &[f64], power: f64, support: usize) -> Vec<f64> {
+    if support >= distances.len() || distances.iter().any(|&d| d <= 0.0) {
+        return shepard_weights(distances, power);
+    }
+    let mut sorted = distances.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let cutoff = sorted[support];
+    let raw: Vec<f64> = distances
+        .iter()
+        .map(|&d| {
+            if d < cutoff {
+                (d.recip() - cutoff.recip()).powf(power)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let s: f64 = raw.iter().sum();
+    if s > 0.0 {
+        return raw.iter().map(|x| x / s).collect();
+    }
+    // Ties at the cutoff: the nearest models share the weight.
+    let nearest = sorted[0];
+    let tied = distances.iter().filter(|&&d| d == nearest).count() as f64;
+    distances
+        .iter()
+        .map(|&d| if d == nearest { tied.recip() } else { 0.0 })
+        .collect()
+}
+
 /// Scaled size of a displacement twist: `‖(v/r, ω/π)‖` (§7.1, §8.2).
 #[must_use]
 pub fn scaled_norm(t: &Twist, r: f64) -> f64 {
@@ -123,6 +174,10 @@ pub fn blend_rank1(eigs: &[&Eigen], mats: &[&Mat<f64>], alpha: &[f64], rank: usi
         let mut qbar = Mat::<f64>::zeros(n, dim);
         let mut lbar = vec![0.0; dim];
         for i in 0..k {
+            if alpha[i] == 0.0 && i != closest {
+                // No weight, no contribution (a compact support leaves most models out).
+                continue;
+            }
             let (q, ev) = if i == closest {
                 (
                     qc.clone(),
@@ -220,6 +275,9 @@ pub struct BlendedModel {
     pub radius: f64,
     /// Shepard exponent p (eq. 25; [`SHEPARD_POWER`] unless changed).
     pub power: f64,
+    /// Models that may carry weight ([`compact_shepard_weights`]); [`SUPPORT`] (all, the
+    /// paper) unless changed.
+    pub support: Option<usize>,
 }
 
 /// The blended end-effector system at one state (Algorithm 5's per-step quantities).
@@ -270,6 +328,7 @@ impl BlendedModel {
             rest,
             radius,
             power: SHEPARD_POWER,
+            support: SUPPORT,
         })
     }
 
@@ -291,7 +350,10 @@ impl BlendedModel {
                     .sum()
             })
             .collect();
-        shepard_weights(&d, self.power)
+        match self.support {
+            Some(k) => compact_shepard_weights(&d, self.power, k),
+            None => shepard_weights(&d, self.power),
+        }
     }
 
     /// The blended system for end effectors at `ee` (Algorithm 5, before the step).
@@ -367,8 +429,15 @@ impl BlendedModel {
     /// `alpha`; one pose per `models[0].internal`.
     #[must_use]
     pub fn internal_poses(&self, ee: &[Pose], alpha: &[f64]) -> Vec<Pose> {
-        let per_model: Vec<Vec<Pose>> = self
+        // A model without weight adds nothing to eq. 28: it is not evaluated.
+        let (models, alpha): (Vec<&ReducedModel>, Vec<f64>) = self
             .models
+            .iter()
+            .zip(alpha)
+            .filter(|(_, a)| **a > 0.0)
+            .map(|(m, a)| (m, *a))
+            .unzip();
+        let per_model: Vec<Vec<Pose>> = models
             .iter()
             .map(|m| {
                 // ξ_e⁽ⁱ⁾ = log(H_e⁽ⁱ⁾⁻¹ H_e), w⁽ⁱ⁾ = K⁽ⁱ⁾ ξ⁽ⁱ⁾.
@@ -383,10 +452,10 @@ impl BlendedModel {
                     .collect()
             })
             .collect();
-        (0..per_model[0].len())
+        (0..self.models[0].internal.len())
             .map(|k| {
                 let poses: Vec<Pose> = per_model.iter().map(|p| p[k]).collect();
-                blend_poses(&poses, alpha)
+                blend_poses(&poses, &alpha)
             })
             .collect()
     }

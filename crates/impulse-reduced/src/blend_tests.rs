@@ -30,6 +30,43 @@ fn shepard_weights_interpolate_and_sum_to_one() {
 }
 
 #[test]
+fn compact_shepard_weights_are_exact_at_samples_local_and_continuous() {
+    // Exact at a sample, whatever the support.
+    assert_eq!(
+        compact_shepard_weights(&[0.3, 0.0, 2.0, 0.1], 4.0, 2),
+        vec![0.0, 1.0, 0.0, 0.0]
+    );
+    // Support at least the number of models: the plain eq. 25.
+    assert_eq!(
+        compact_shepard_weights(&[0.1, 0.7, 3.0], 2.0, 3),
+        shepard_weights(&[0.1, 0.7, 3.0], 2.0)
+    );
+    // Two of four: the third nearest (0.5) is the cutoff; (1/d − 1/R)^p, normalised.
+    let w = compact_shepard_weights(&[0.2, 0.5, 0.25, 0.9], 2.0, 2);
+    let (a, b) = (
+        (1.0_f64 / 0.2 - 2.0).powi(2),
+        (1.0_f64 / 0.25 - 2.0).powi(2),
+    );
+    let expected = [a / (a + b), 0.0, b / (a + b), 0.0];
+    for (x, y) in w.iter().zip(expected) {
+        assert!((x - y).abs() < EXACT_REL, "{w:?}");
+    }
+    // Continuous where the second and third nearest swap (both at 0.4): the model leaving
+    // the support has no weight just before and just after.
+    for h in [1e-6, 1e-9] {
+        let before = compact_shepard_weights(&[0.1, 0.4 - h, 0.4 + h, 0.9], 4.0, 2);
+        let after = compact_shepard_weights(&[0.1, 0.4 + h, 0.4 - h, 0.9], 4.0, 2);
+        assert!((before[0] - 1.0).abs() < 1e3 * h && (after[0] - 1.0).abs() < 1e3 * h);
+        assert!(before[1] < 1e3 * h && after[2] < 1e3 * h);
+    }
+    // Ties for nearest at the cutoff: the tied models share.
+    assert_eq!(
+        compact_shepard_weights(&[0.5, 0.5, 0.5, 0.9], 4.0, 2),
+        vec![1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 0.0]
+    );
+}
+
+#[test]
 fn rank1_blend_is_exact_at_samples_and_for_equal_matrices() {
     let mut rng = rng(5);
     for case in 0..100 {
