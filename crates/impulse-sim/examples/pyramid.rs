@@ -1,6 +1,6 @@
 //! A pyramid of 55 blocks (rows of 10, 9, …, 1, each block centred over the gap of the two
 //! below), in the default (switching) contact model: prints, every half second, the wall time,
-//! island steps, how many blocks sleep, the top block's drift and the deepest interpenetration
+//! island steps, the contact solver's sweeps and solves stopped at its cap, how many blocks sleep, the top block's drift and the deepest interpenetration
 //! the independent monitor saw.
 //!
 //! `cargo run --release -p impulse-sim --example pyramid -- [rows] [seconds]`
@@ -46,10 +46,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         world.step_until(t)?;
         monitor.sample(&world);
         let asleep = world.bodies().filter(|(_, b)| b.is_asleep()).count();
+        let c = world.counters();
         println!(
-            "t {t:.1} s  wall {:.2} s  island steps {}  asleep {asleep}  top drift {:.2} ε_c  deepest {:.3} ε_c",
+            "t {t:.1} s  wall {:.2} s  island steps {}  sweeps {}  unconverged {}  asleep {asleep}  top drift {:.2} ε_c  deepest {:.3} ε_c",
             wall.elapsed().as_secs_f64(),
-            world.counters().island_steps,
+            c.island_steps,
+            c.island_sweeps,
+            c.unconverged_solves,
             (world.state(top)?.position - start).length() / eps,
             monitor.report().max_depth / eps
         );

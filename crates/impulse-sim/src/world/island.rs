@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use impulse_collide::manifold::{self, MAX_POINTS, Manifold, ManifoldCache};
-use impulse_response::{Contact, IslandBody, SolverSettings, solve_contacts};
+use impulse_response::{Contact, ContactFrame, IslandBody, SolverSettings, solve_contacts};
 use rustc_hash::FxHashMap;
 
 use super::World;
@@ -37,7 +37,10 @@ const STRUCK_FRACTION: f64 = 1e-2;
 const TURN_STEP_SAFETY: f64 = 0.5;
 
 /// A pair the islands hold: its manifolds of the last step and the impulse each point carried
-/// (the warm start of the next step).
+/// (the warm start of the next step), in world axes: a contact frame is built from its
+/// normal, and for a normal along a world axis its tangents turn by 90° with the normal's
+/// rounding (`ContactFrame::from_normal` picks the axis least aligned with it), so an
+/// impulse kept in frame coordinates would return with its friction pointing elsewhere.
 #[derive(Clone, Debug, Default)]
 pub(super) struct HeldPair {
     manifolds: Vec<Manifold>,
@@ -517,7 +520,7 @@ impl World {
                         normal: man.normal,
                         friction,
                         target_normal_velocity: 0.0,
-                        impulse: imp[q],
+                        impulse: self.contact_frame(man.normal)?.to_contact(imp[q]),
                     });
                     gaps.push(point.gap);
                     origin.push((p, m, q));
@@ -618,11 +621,19 @@ impl World {
         }
         // Keep each point's impulse for the next step's warm start.
         for (c, &(p, m, q)) in solution.iter().zip(&origin) {
+            let world = self.contact_frame(c.normal)?.to_world(c.impulse);
             if let Some(held) = self.islands.held.get_mut(&p) {
-                held.impulses[m][q] = c.impulse;
+                held.impulses[m][q] = world;
             }
         }
         Ok(h)
+    }
+
+    /// The solver's frame of a contact with this normal ([`Contact::impulse`] is in its
+    /// axes).
+    fn contact_frame(&self, normal: DVec3) -> Result<ContactFrame, SimError> {
+        ContactFrame::from_normal(normal)
+            .map_err(|e| self.runtime(format!("held contact normal: {e}")))
     }
 
     /// Velocities after a step of length `h` without contact: gravity, loads (the gyroscopic
