@@ -1,7 +1,7 @@
 //! A pyramid of 55 blocks (rows of 10, 9, …, 1, each block centred over the gap of the two
 //! below), in the default (switching) contact model: prints, every half second, the wall time,
-//! island steps, the contact solver's sweeps and solves stopped at its cap, how many blocks sleep, the top block's drift and the deepest interpenetration
-//! the independent monitor saw.
+//! island steps, the contact solver's sweeps and solves stopped at its cap, how many blocks
+//! sleep, the top block's drift and the deepest interpenetration the independent monitor saw.
 //!
 //! `cargo run --release -p impulse-sim --example pyramid -- [rows] [seconds]`
 
