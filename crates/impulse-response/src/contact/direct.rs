@@ -96,11 +96,11 @@ impl Class {
     }
 }
 
-/// Tries to jump to the solution on Gauss–Seidel's active set (or, when that fails other than
-/// by diverging in its first round, on the set where every contact sticks); applies the impulse change to
-/// the bodies and contacts and returns true when the result keeps the laws (a contact that
-/// does not press may not approach faster than `tolerance` below its target), else changes
-/// nothing and returns false.
+/// Tries to jump to the solution on Gauss–Seidel's active set (or, when that fails other
+/// than by diverging in its first round, on the set where every contact sticks); applies the
+/// impulse change to the bodies and contacts and returns true when the result keeps the laws
+/// (a contact that does not press may not approach faster than `tolerance` below its target),
+/// else changes nothing and returns false.
 pub(super) fn solve_active_set(
     bodies: &mut [IslandBody],
     contacts: &mut [Contact],

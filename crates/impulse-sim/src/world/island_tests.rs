@@ -717,22 +717,7 @@ fn solver_counters_count_sweeps_and_unconverged_solves() {
         let mut settings = WorldSettings::new(1e-4);
         settings.sustained.max_sweeps = max_sweeps;
         let mut world = World::new(settings).expect("valid settings");
-        world
-            .add_body(
-                &BodyDesc::fixed("floor", ShapeDesc::cuboid([0.5, 0.5, 0.05]))
-                    .at([0.0, 0.0, -0.05]),
-            )
-            .expect("free space");
-        let h = 0.05;
-        for k in 0..4 {
-            world
-                .add_body(
-                    &BodyDesc::new(format!("block{k}"), ShapeDesc::cuboid([h, h, h]))
-                        .at([0.0, 0.0, h + 2.0 * h * f64::from(k)])
-                        .with_density(700.0),
-                )
-                .expect("free space");
-        }
+        super::step_tests::add_touching_stack(&mut world, 4);
         world.step_until(0.2).expect("runs").counters
     };
     let capped = run(1);

@@ -158,8 +158,8 @@ pub struct Counters {
     pub island_sweeps: u64,
     /// Island solves that stopped at the sweep cap ([`SustainedSettings::max_sweeps`]) short
     /// of the solver tolerance: their impulses are the last sweep's, not a solution. Many of
-    /// them mark a scene the switching model runs slowly (a wall of bricks placed touching,
-    /// the settling pyramid: `docs/sustained-contact.md`, Open).
+    /// them mark a scene the switching model runs slowly (`docs/sustained-contact.md`,
+    /// Open).
     pub unconverged_solves: u64,
     /// Direct solves on the sweeps' active set that were accepted.
     pub direct_solves: u64,

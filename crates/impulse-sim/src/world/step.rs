@@ -64,16 +64,7 @@ impl World {
                 monitor.sample(self);
                 self.checking = Some(monitor);
             }
-            return Ok(StepReport {
-                start,
-                end: self.time,
-                counters: difference(&self.counters(), &before),
-                contacts: 0,
-                checked_penetration: self
-                    .checked_penetration()
-                    .map(|r| r.max_depth)
-                    .filter(|_| checked_before.is_some()),
-            });
+            return Ok(self.report_since(start, &before, checked_before));
         }
         let backup = self.clone();
         self.recent.clear();
@@ -88,17 +79,27 @@ impl World {
             *self = backup;
             return Err(e);
         }
-        let after = self.counters();
-        Ok(StepReport {
+        Ok(self.report_since(start, &before, checked_before))
+    }
+
+    /// What a `step_until` call that started at `start` with the counters `before` (and the
+    /// checking monitor's depth `checked_before`, when it was on) did.
+    fn report_since(
+        &self,
+        start: f64,
+        before: &Counters,
+        checked_before: Option<f64>,
+    ) -> StepReport {
+        StepReport {
             start,
             end: self.time,
-            counters: difference(&after, &before),
+            counters: difference(&self.counters(), before),
             contacts: self.recent.len(),
             checked_penetration: self
                 .checked_penetration()
                 .map(|r| r.max_depth)
                 .filter(|_| checked_before.is_some()),
-        })
+        }
     }
 
     /// Whether the world is quiet until `t`: later than now, no body moves (every one fixed or

@@ -9,6 +9,34 @@ use crate::world::{World, WorldSettings};
 /// program drawing frames would call it.
 const POLL_RATE: f64 = 100.0;
 
+/// Half size of the cubes of [`add_touching_stack`] (m).
+pub(super) const STACK_HALF: f64 = 0.05;
+
+/// Adds a fixed floor and `n` cubes of half size [`STACK_HALF`] (density 700, named
+/// `block0`, `block1`, …) stacked on it, each touching the one below.
+pub(super) fn add_touching_stack(world: &mut World, n: u32) {
+    world
+        .add_body(
+            &BodyDesc::fixed("floor", ShapeDesc::cuboid([0.5, 0.5, 0.05])).at([0.0, 0.0, -0.05]),
+        )
+        .expect("free space");
+    let h = STACK_HALF;
+    for k in 0..n {
+        world
+            .add_body(
+                &BodyDesc::new(format!("block{k}"), ShapeDesc::cuboid([h, h, h]))
+                    .at([0.0, 0.0, h + 2.0 * h * f64::from(k)])
+                    .with_density(700.0),
+            )
+            .expect("free space");
+    }
+}
+
+/// The bit patterns of a vector's components, for comparisons that must be exact.
+fn bits(v: DVec3) -> [u64; 3] {
+    v.to_array().map(f64::to_bits)
+}
+
 /// A stack of four blocks placed in contact, which sleeps, polled at [`POLL_RATE`] for 2 s;
 /// then a ball added just above it lands on it and wakes it, and the run goes on to 3 s.
 /// With the quiet path (calls while nothing moves and nothing is due only move the clock)
@@ -23,22 +51,8 @@ fn a_world_at_rest_steps_exactly_as_the_loop_would() {
         settings.default_contact.restitution = 0.3;
         let mut world = World::new(settings).expect("valid settings");
         world.faults.no_quiet_path = !quiet;
-        world
-            .add_body(
-                &BodyDesc::fixed("floor", ShapeDesc::cuboid([0.5, 0.5, 0.05]))
-                    .at([0.0, 0.0, -0.05]),
-            )
-            .expect("free space");
-        let h = 0.05;
-        for k in 0..4 {
-            world
-                .add_body(
-                    &BodyDesc::new(format!("block{k}"), ShapeDesc::cuboid([h, h, h]))
-                        .at([0.0, 0.0, h + 2.0 * h * f64::from(k)])
-                        .with_density(700.0),
-                )
-                .expect("free space");
-        }
+        add_touching_stack(&mut world, 4);
+        let h = STACK_HALF;
         let mut k = 1u32;
         let mut poll_to = |world: &mut World, end: f64| {
             while f64::from(k) / POLL_RATE <= end {
@@ -78,7 +92,6 @@ fn a_world_at_rest_steps_exactly_as_the_loop_would() {
         || quiet.counters().sleeps > 1;
     assert!(woken, "the ball woke the stack");
     for ((_, a), (_, b)) in quiet.bodies().zip(loop_only.bodies()) {
-        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
         assert_eq!(
             bits(a.pose.translation),
             bits(b.pose.translation),
@@ -133,7 +146,6 @@ fn a_small_world_on_its_own_pool_stays_on_the_calling_thread() {
         pooled.faults.pool_steps
     );
     assert_eq!(own.counters(), pooled.counters());
-    let bits = |v: DVec3| v.to_array().map(f64::to_bits);
     for ((_, a), (_, b)) in own.bodies().zip(pooled.bodies()) {
         assert_eq!(
             bits(a.pose.translation),
