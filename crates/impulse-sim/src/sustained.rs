@@ -11,6 +11,14 @@
 //!   thesis's own microcollision threshold, eq. 3.18) gets no impulse: it is *held* — it leaves
 //!   the collision heap's schedule and joins the contact islands. Anything faster is a
 //!   collision of chapter 3, exactly as in [`ContactMode::Impulse`].
+//! - **Struck twice at one instant**: a pair found approaching within ε_c at the very instant
+//!   of its last collision is held too, whatever its speed (unless a body of it turns fast).
+//!   Bodies pressed together by other impacts at one instant — a heavy ball landing on a stack
+//!   of light boxes — would otherwise trade collisions without end (a box 1000 times lighter
+//!   than the ball passes on about a thousandth of its momentum per exchange: over 10 000
+//!   collisions at one instant). Held, they are solved together by their island's impulsive
+//!   solve (e = 0 between held contacts), the limit such a train of collisions tends to;
+//!   each pair's first collision keeps its restitution.
 //! - **Island steps**: every `h` ([`SustainedSettings::step`], shorter while a body turns: down
 //!   to [`SustainedSettings::min_step`]) the held pairs' manifolds are
 //!   computed (`impulse_collide::manifold`), bodies joined by held pairs form islands, and each

@@ -264,6 +264,7 @@ impl World {
                 // faster than the switching speed is held, pressing or not (a body placed
                 // touching, or sliding along a surface, is in sustained contact from now).
                 let hold = self.holds(pair, x.unwrap_or(mid), n);
+                let struck = !hold && x.is_some() && self.struck_again(pair);
                 if hold || x.is_some() {
                     // A sleeping island touched by something approaching wakes first.
                     let mut woken = self.wake(pair.0);
@@ -274,6 +275,9 @@ impl World {
                 }
                 if hold {
                     self.hold(pair);
+                    held = true;
+                } else if struck {
+                    self.hold_struck(pair);
                     held = true;
                 } else if let Some(x) = x {
                     // A slow contact that is not held because a body turns too fast makes
@@ -292,6 +296,12 @@ impl World {
                         self.rekey(&stale, Some(pair))?;
                     }
                     hit = self.resolve(pair, x, n, scan.distance);
+                    if hit {
+                        let time = self.time;
+                        if let Some(state) = self.pairs.get_mut(&pair) {
+                            state.last_hit = Some(time);
+                        }
+                    }
                 }
             }
             // With no normal at all (not even from the penetration query), the pair is checked
@@ -404,6 +414,26 @@ impl World {
         }
         self.is_slow((a, b), x, n)
             && super::island::turn_speed(ba, bb, Some(n))
+                < HOLD_ROTATION_FRACTION * self.rotation_limit()
+    }
+
+    /// Whether a pair found approaching within ε_c is held instead of struck again: in the
+    /// switching model, when it took a collision impulse at this very instant and a body of it
+    /// is dynamic and neither turns fast ([`HOLD_ROTATION_FRACTION`]). Bodies pressed together
+    /// by other impacts at one instant (a heavy ball landing on a stack of light boxes) would
+    /// otherwise trade collisions without end: each exchange between a body 1000 times lighter
+    /// and a heavier one passes on a thousandth of the momentum. Held, the pairs are solved
+    /// together by their island's impulsive solve (e = 0 between held contacts), which is the
+    /// limit such a train of collisions tends to; each pair's first collision keeps its
+    /// restitution.
+    fn struck_again(&self, (a, b): (u32, u32)) -> bool {
+        if !self.switching() || self.pairs.get(&(a, b)).and_then(|s| s.last_hit) != Some(self.time)
+        {
+            return false;
+        }
+        let (ba, bb) = (self.b(a), self.b(b));
+        (ba.is_dynamic() || bb.is_dynamic())
+            && super::island::rotation_speed(ba, bb)
                 < HOLD_ROTATION_FRACTION * self.rotation_limit()
     }
 

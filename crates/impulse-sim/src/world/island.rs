@@ -8,6 +8,7 @@ use impulse_response::{Contact, ContactFrame, IslandBody, SolverSettings, solve_
 use rustc_hash::FxHashMap;
 
 use super::World;
+use super::patch::{patch_plane_fit, patch_ranges, patch_targets};
 use crate::contact::response_body;
 use crate::error::SimError;
 use crate::sustained::{
@@ -49,6 +50,10 @@ pub(super) struct HeldPair {
     /// Length of the step the impulses were solved for (s), to scale the warm start to the
     /// next step; 0 before the first.
     span: f64,
+    /// Held because the pair was struck again at the instant of its last collision, and not
+    /// yet stepped: its approach is the strike its island's impulsive solve is about to stop,
+    /// not a motion of the coming step, so only rotation counts toward releasing it.
+    struck: bool,
 }
 
 /// The islands' state in a world.
@@ -162,6 +167,15 @@ impl World {
         self.islands.held.entry(pair).or_default();
         self.step_now(pair.0);
         self.step_now(pair.1);
+    }
+
+    /// Holds a pair struck again at the instant of its last collision ([`Self::hold`]; the
+    /// rule is documented in [`crate::sustained`]).
+    pub(super) fn hold_struck(&mut self, pair: (u32, u32)) {
+        self.hold(pair);
+        if let Some(held) = self.islands.held.get_mut(&pair) {
+            held.struck = true;
+        }
     }
 
     /// Body `i`'s island steps now (it was struck, changed, woken or joined).
@@ -350,7 +364,11 @@ impl World {
             // to the event loop, which bounds them (a body half held, half hit by
             // microcollisions would be pressed by a held load the microcollisions do not
             // know of).
-            let turn = turn_speed(ba, bb, Some(live[0].normal));
+            let turn = if held.struck {
+                rotation_speed(ba, bb)
+            } else {
+                turn_speed(ba, bb, Some(live[0].normal))
+            };
             if turn > limit {
                 for (i, b) in [(p.0, ba), (p.1, bb)] {
                     if rotation_speed(b, b) > limit {
@@ -432,6 +450,7 @@ impl World {
             for p in &island.pairs {
                 if let Some(held) = self.islands.held.get_mut(p) {
                     held.span = h;
+                    held.struck = false;
                 }
             }
             for &i in &island.bodies {
@@ -533,7 +552,7 @@ impl World {
         // a step's drift) asked of the points one by one is a target no motion meets, and the
         // solver answers it with huge opposite impulses on redundant corners.
         let patches = patch_ranges(&origin);
-        let gaps = patch_plane_gaps(&contacts, &patches, &gaps);
+        let gaps = patch_plane_fit(&contacts, &patches, &gaps);
         // Transients: a held contact approaching (faster than STRUCK_FRACTION·v_s) gets an
         // impulsive solve of its island first (e = 0 between held contacts): the island reacts
         // to a strike at once, through its constraints, not over a step.
@@ -543,9 +562,12 @@ impl World {
             .fold(f64::INFINITY, f64::min);
         if approach < -STRUCK_FRACTION * v_s {
             let mut jolt = contacts.clone();
-            for (c, &gap) in jolt.iter_mut().zip(&gaps) {
+            let targets = patch_targets(&contacts, &patches, &gaps, |g| {
+                self.stabilisation_speed(g).max(0.0)
+            });
+            for (c, &target) in jolt.iter_mut().zip(&targets) {
                 c.impulse = DVec3::ZERO;
-                c.target_normal_velocity = self.stabilisation_speed(gap).max(0.0);
+                c.target_normal_velocity = target;
             }
             self.solve(&mut bodies, &mut jolt, &solver)?;
             self.counters.transients += 1;
@@ -562,8 +584,10 @@ impl World {
             let predicted = bodies.clone();
             // The stabilisation's rate is that of the nominal step: a step cut short by a
             // transition must not push harder.
-            for (c, &gap) in contacts.iter_mut().zip(&gaps) {
-                c.target_normal_velocity = self.stabilisation_speed(gap);
+            let targets =
+                patch_targets(&contacts, &patches, &gaps, |g| self.stabilisation_speed(g));
+            for (c, &target) in contacts.iter_mut().zip(&targets) {
+                c.target_normal_velocity = target;
             }
             let mut trial = contacts.clone();
             self.solve(&mut bodies, &mut trial, &solver)?;
@@ -710,99 +734,6 @@ pub(super) fn rotation_speed(a: &crate::body::Body, b: &crate::body::Body) -> f6
         }
     };
     turn(a) + turn(b)
-}
-
-/// Relative size below which a patch's point layout is treated as degenerate (collinear or a
-/// single point) when fitting a plane to its gaps. Default `1e-6`.
-const PATCH_FIT_DEGENERATE: f64 = 1e-6;
-
-/// The index ranges of an island's patches: the contacts of one manifold (pair and manifold
-/// index of `origin`), which are consecutive.
-fn patch_ranges(origin: &[((u32, u32), usize, usize)]) -> Vec<std::ops::Range<usize>> {
-    let mut ranges = Vec::new();
-    let mut k = 0;
-    while k < origin.len() {
-        let patch = (origin[k].0, origin[k].1);
-        let mut end = k;
-        while end < origin.len() && (origin[end].0, origin[end].1) == patch {
-            end += 1;
-        }
-        ranges.push(k..end);
-        k = end;
-    }
-    ranges
-}
-
-/// Each contact's gap replaced by the value at its point of the plane (a line for collinear
-/// points, the mean for one point) fitted by least squares to the gaps of its patch.
-fn patch_plane_gaps(
-    contacts: &[Contact],
-    patches: &[std::ops::Range<usize>],
-    gaps: &[f64],
-) -> Vec<f64> {
-    let mut out = gaps.to_vec();
-    for range in patches {
-        let points: Vec<DVec3> = contacts[range.clone()].iter().map(|c| c.point).collect();
-        let fit = fit_plane(&points, contacts[range.start].normal, &gaps[range.clone()]);
-        out[range.clone()].copy_from_slice(&fit);
-    }
-    out
-}
-
-/// Least-squares plane g ≈ a + b·s + c·t over the points' coordinates (s, t) in the plane
-/// normal to `normal`; a line or the mean when the points do not span a plane.
-fn fit_plane(points: &[DVec3], normal: DVec3, gaps: &[f64]) -> Vec<f64> {
-    let n = points.len();
-    let mean = gaps.iter().sum::<f64>() / n as f64;
-    if n < 2 {
-        return vec![mean; n];
-    }
-    let centre = points.iter().copied().sum::<DVec3>() / n as f64;
-    let radius = points
-        .iter()
-        .map(|p| (*p - centre).length())
-        .fold(0.0_f64, f64::max);
-    if radius <= 0.0 {
-        return vec![mean; n];
-    }
-    let (t1, t2) = normal.normalize_or_zero().any_orthonormal_pair();
-    let coords: Vec<(f64, f64)> = points
-        .iter()
-        .map(|p| {
-            (
-                (*p - centre).dot(t1) / radius,
-                (*p - centre).dot(t2) / radius,
-            )
-        })
-        .collect();
-    // Normal equations of (a, b, c); the coordinates are centred and scaled to O(1).
-    let mut m = glam::DMat3::ZERO;
-    let mut r = DVec3::ZERO;
-    for (&(s, t), &g) in coords.iter().zip(gaps) {
-        let x = DVec3::new(1.0, s, t);
-        m += glam::DMat3::from_cols(x * x.x, x * x.y, x * x.z);
-        r += x * g;
-    }
-    if m.determinant().abs() > PATCH_FIT_DEGENERATE * (n * n * n) as f64 {
-        let c = m.inverse() * r;
-        return coords
-            .iter()
-            .map(|&(s, t)| c.x + c.y * s + c.z * t)
-            .collect();
-    }
-    // Collinear: a line along the direction of the largest spread.
-    let (ss, st, tt) = coords.iter().fold((0.0, 0.0, 0.0), |(a, b, c), &(s, t)| {
-        (a + s * s, b + s * t, c + t * t)
-    });
-    let angle = 0.5 * (2.0 * st).atan2(ss - tt);
-    let (dir_s, dir_t) = (angle.cos(), angle.sin());
-    let u: Vec<f64> = coords.iter().map(|&(s, t)| s * dir_s + t * dir_t).collect();
-    let uu: f64 = u.iter().map(|x| x * x).sum();
-    if uu <= PATCH_FIT_DEGENERATE * n as f64 {
-        return vec![mean; n];
-    }
-    let slope = u.iter().zip(gaps).map(|(x, g)| x * (g - mean)).sum::<f64>() / uu;
-    u.iter().map(|x| mean + slope * x).collect()
 }
 
 /// How fast another feature of a held pair can approach: its bodies' rotation

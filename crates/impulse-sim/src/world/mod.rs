@@ -44,6 +44,7 @@ mod api;
 mod check;
 mod island;
 mod materials;
+mod patch;
 mod step;
 
 use std::path::PathBuf;
@@ -310,6 +311,9 @@ struct PairState {
     features: Vec<FeaturePair>,
     /// Last contact normal seen per piece pair (world, from the second body toward the first).
     normals: Vec<Option<DVec3>>,
+    /// When the pair last took a collision impulse (the switching model holds a pair struck
+    /// twice at one instant: `check_top`).
+    last_hit: Option<f64>,
 }
 
 /// One slot of the body table.
