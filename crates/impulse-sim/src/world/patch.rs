@@ -190,7 +190,7 @@ mod tests {
         // sums agree (a plane over the square); the gaps' own speeds do not.
         let skew = |v: &[f64]| (v[0] + v[2]) - (v[1] + v[3]);
         assert!(skew(&own).abs() > 1e-3, "the case must straddle a kink");
-        let targets = patch_targets(&contacts, &[0..4], &gaps, speed);
+        let targets = patch_targets(&contacts, std::slice::from_ref(&(0..4)), &gaps, speed);
         let scale = own.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         assert!(
             skew(&targets).abs() <= 1e-12 * scale,
@@ -217,7 +217,7 @@ mod tests {
         let contacts = square(0.1);
         let inside = [1.2e-5, 3e-5, 4.9e-5, 2e-5];
         assert_eq!(
-            patch_targets(&contacts, &[0..4], &inside, speed),
+            patch_targets(&contacts, std::slice::from_ref(&(0..4)), &inside, speed),
             vec![0.0; 4]
         );
         // Two points (an edge) and one point (a ball): a line and a mean fit them exactly.
