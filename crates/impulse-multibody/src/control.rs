@@ -13,6 +13,7 @@ use std::any::Any;
 use crate::dynamics::{Workspace, forward_dynamics, inverse_dynamics};
 use crate::error::MultibodyError;
 use crate::integrate::{Accel, Integrator, IntegratorStats, Stepper};
+use crate::limit::{DEFAULT_LIMIT_REST_SPEED, InverseMass, LimitStats, Stop};
 use crate::model::{Model, check_len};
 
 /// What a controller sees at an update: the time, the model and the sampled state.
@@ -267,11 +268,13 @@ impl Slot {
 }
 
 /// The right-hand side during one control interval.
-struct Rhs<'a> {
-    model: &'a Model,
-    ws: &'a mut Workspace,
-    held: &'a [f64],
-    tau: &'a mut [f64],
+pub(crate) struct Rhs<'a> {
+    pub(crate) model: &'a Model,
+    pub(crate) ws: &'a mut Workspace,
+    pub(crate) held: &'a [f64],
+    pub(crate) tau: &'a mut [f64],
+    /// Joints resting on a stop: held at zero acceleration by a constraint force.
+    pub(crate) resting: &'a [Stop],
 }
 
 impl Accel for Rhs<'_> {
@@ -285,24 +288,40 @@ impl Accel for Rhs<'_> {
         self.tau.copy_from_slice(self.held);
         // Passive elements inside every derivative evaluation (§5.4.1).
         self.model.add_passive_forces(q, v, self.tau)?;
-        forward_dynamics(self.model, self.ws, q, v, self.tau, None, vdot)
+        forward_dynamics(self.model, self.ws, q, v, self.tau, None, vdot)?;
+        if !self.resting.is_empty() {
+            let joints: Vec<usize> = self.resting.iter().map(|s| s.joint).collect();
+            InverseMass::new(self.model, self.ws, q)?.constrain(
+                vdot,
+                &joints,
+                &vec![0.0; joints.len()],
+            );
+        }
+        Ok(())
     }
 }
 
 /// A multibody moving under gravity, passive joint elements, applied forces and scheduled
 /// controllers, advanced by an [`Integrator`].
 pub struct Simulation {
-    model: Model,
-    q: Vec<f64>,
-    v: Vec<f64>,
-    t: f64,
-    integrator: Integrator,
-    stepper: Stepper,
-    ws: Workspace,
+    pub(crate) model: Model,
+    pub(crate) q: Vec<f64>,
+    pub(crate) v: Vec<f64>,
+    pub(crate) t: f64,
+    pub(crate) integrator: Integrator,
+    pub(crate) stepper: Stepper,
+    pub(crate) ws: Workspace,
     applied: Vec<f64>,
-    held: Vec<f64>,
-    tau: Vec<f64>,
+    pub(crate) held: Vec<f64>,
+    pub(crate) tau: Vec<f64>,
     slots: Vec<Slot>,
+    /// Joints resting on a stop ([`crate::limit`]).
+    pub(crate) resting: Vec<Stop>,
+    /// Stops struck slower than this rest (rad/s or m/s).
+    pub(crate) rest_speed: f64,
+    pub(crate) limit_stats: LimitStats,
+    /// The instant of the last stop and how many stops were resolved at it.
+    pub(crate) instant: (f64, usize),
 }
 
 impl std::fmt::Debug for Simulation {
@@ -351,7 +370,15 @@ impl Simulation {
             held: vec![0.0; nv],
             tau: vec![0.0; nv],
             slots: Vec::new(),
+            resting: Vec::new(),
+            rest_speed: DEFAULT_LIMIT_REST_SPEED,
+            limit_stats: LimitStats::default(),
+            instant: (f64::NEG_INFINITY, 0),
             model,
+        })
+        .and_then(|sim| {
+            sim.check_limits()?;
+            Ok(sim)
         })
     }
 
@@ -397,9 +424,17 @@ impl Simulation {
     pub fn set_state(&mut self, q: &[f64], v: &[f64]) -> Result<(), MultibodyError> {
         check_len("q", self.model.nq(), q.len())?;
         check_len("v", self.model.nv(), v.len())?;
+        let (old_q, old_v) = (self.q.clone(), self.v.clone());
         self.q.copy_from_slice(q);
         self.v.copy_from_slice(v);
         crate::integrate::normalize_config(&self.model, &mut self.q);
+        if let Err(e) = self.check_limits() {
+            self.q = old_q;
+            self.v = old_v;
+            return Err(e);
+        }
+        // A new state is a new start: no joint rests on a stop until it strikes one.
+        self.resting.clear();
         Ok(())
     }
 
@@ -545,11 +580,16 @@ impl Simulation {
                 return Ok(());
             }
             let next = self.slots.iter().map(Slot::next_time).fold(t_end, f64::min);
+            if self.model.has_limits() {
+                self.step_with_stops(next)?;
+                continue;
+            }
             let mut rhs = Rhs {
                 model: &self.model,
                 ws: &mut self.ws,
                 held: &self.held,
                 tau: &mut self.tau,
+                resting: &[],
             };
             self.stepper.advance(
                 &self.integrator,

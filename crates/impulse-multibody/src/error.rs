@@ -122,6 +122,17 @@ pub enum MultibodyError {
         /// The configured minimum (s).
         min_step: f64,
     },
+    /// Joint stops struck at one instant kept driving each other
+    /// ([`crate::limit::MAX_STOPS_PER_INSTANT`] stops without time advancing).
+    #[error("joint `{joint}`: {count} stops at t = {time} s without time advancing")]
+    LimitStall {
+        /// The joint of the last stop.
+        joint: String,
+        /// Simulation time (s).
+        time: f64,
+        /// Stops resolved at that instant.
+        count: usize,
+    },
     /// The state became non-finite during integration.
     #[error("the state became non-finite at t = {time} s")]
     NonFiniteState {

@@ -14,6 +14,10 @@
 //! - joint controllers at their own rates with zero-order hold, scheduled so the integrator
 //!   stops at every update (thesis §5.4): PD, PID, computed torque, user controllers
 //!   ([`Simulation`], [`Controller`]);
+//! - joint limits as one-sided impulsive stops: a joint reaching its limit is a collision in
+//!   joint space, located in time and resolved with the stop's restitution, and a joint that
+//!   comes to rest on a stop is held there until its load lifts it off ([`limit`],
+//!   [`JointLimit`]);
 //! - the multibody collision-response pieces of thesis §5.3: the 3×3 collision matrix K of a
 //!   contact point on any link by test impulses through the impulse-space articulated-body
 //!   recursion (eq. 5.11 in its corrected form), propagation of a collision impulse through the
@@ -82,6 +86,7 @@ mod control;
 mod dynamics;
 mod error;
 mod integrate;
+pub mod limit;
 mod model;
 mod spatial;
 pub mod urdf;
@@ -99,6 +104,7 @@ pub use error::MultibodyError;
 /// dependency of their own.
 pub use faer::Mat;
 pub use integrate::{AdaptiveRk4, Integrator, IntegratorStats};
+pub use limit::{JointLimit, LimitStats};
 pub use model::{BaseKind, JointPassive, JointSpec, JointType, LinkId, Model, ModelBuilder};
 
 /// Numerical tolerances of this crate, each with its reason.

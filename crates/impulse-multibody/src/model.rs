@@ -4,6 +4,7 @@ use glam::{DMat3, DQuat, DVec3};
 use impulse_geom::{Pose, SpatialInertia};
 
 use crate::error::MultibodyError;
+use crate::limit::JointLimit;
 use crate::spatial::{Sym6, Xform};
 use crate::tol::{AXIS_MIN_NORM, INERTIA_PD_REL, INERTIA_SYMMETRY_REL};
 
@@ -171,6 +172,8 @@ pub struct JointSpec {
     pub joint_type: JointType,
     /// Springs, dampers and friction at this joint.
     pub passive: JointPassive,
+    /// Travel limits as impulsive stops (revolute and prismatic joints only).
+    pub limit: Option<JointLimit>,
 }
 
 impl JointSpec {
@@ -182,6 +185,7 @@ impl JointSpec {
             origin,
             joint_type,
             passive: JointPassive::default(),
+            limit: None,
         }
     }
 
@@ -207,6 +211,13 @@ impl JointSpec {
     #[must_use]
     pub fn with_passive(mut self, passive: JointPassive) -> Self {
         self.passive = passive;
+        self
+    }
+
+    /// The same joint with travel limits ([`JointLimit`]: impulsive stops).
+    #[must_use]
+    pub fn with_limit(mut self, limit: JointLimit) -> Self {
+        self.limit = Some(limit);
         self
     }
 }
@@ -332,6 +343,8 @@ pub struct Model {
     pub(crate) joint_names: Vec<String>,
     /// Passive elements per joint coordinate.
     pub(crate) passive: Vec<JointPassive>,
+    /// Travel limits per joint coordinate.
+    pub(crate) limits: Vec<Option<JointLimit>>,
     /// Name of the first link of each moving body.
     pub(crate) body_names: Vec<String>,
 }
@@ -419,6 +432,18 @@ impl Model {
         p.validate(name)?;
         self.passive[j] = p;
         Ok(())
+    }
+
+    /// Travel limits of joint `j` (coordinate order), if it has any.
+    #[must_use]
+    pub fn limit(&self, j: usize) -> Option<&JointLimit> {
+        self.limits.get(j).and_then(Option::as_ref)
+    }
+
+    /// Whether any joint has travel limits.
+    #[must_use]
+    pub fn has_limits(&self) -> bool {
+        self.limits.iter().any(Option::is_some)
     }
 
     /// Index of the named joint in coordinate order (`None` for fixed or unknown joints).
@@ -632,6 +657,9 @@ fn build(b: &ModelBuilder) -> Result<Model, MultibodyError> {
         };
         axes.push(axis);
         j.passive.validate(&j.name)?;
+        if let Some(limit) = &j.limit {
+            limit.validate(&j.name, &j.joint_type)?;
+        }
     }
     // Tree structure.
     let n_links = b.links.len();
@@ -689,6 +717,7 @@ fn build(b: &ModelBuilder) -> Result<Model, MultibodyError> {
     let mut body_names = Vec::new();
     let mut joint_order = Vec::new();
     let mut passive = Vec::new();
+    let mut limits = Vec::new();
     let root_body = match b.base {
         BaseKind::Fixed => None,
         BaseKind::Floating => {
@@ -750,6 +779,7 @@ fn build(b: &ModelBuilder) -> Result<Model, MultibodyError> {
                 body_names.push(child_name.clone());
                 joint_order.push(j.name.clone());
                 passive.push(j.passive);
+                limits.push(j.limit);
                 LinkInfo {
                     name: child_name.clone(),
                     body: Some(bodies.len() - 1),
@@ -802,6 +832,7 @@ fn build(b: &ModelBuilder) -> Result<Model, MultibodyError> {
         links: link_infos,
         joint_names: joint_order,
         passive,
+        limits,
         body_names,
     })
 }

@@ -12,7 +12,9 @@
 //!   `Rz(y)·Ry(p)·Rx(r)`), `<axis>` is in the joint frame (default x). `<dynamics damping
 //!   friction>` become a viscous damper and constant (Coulomb) friction ([`JointPassive`]).
 //!   `<limit>`, `<calibration>` and `<safety_controller>` are ignored (they do not enter the
-//!   dynamics). `floating`, `planar` and `spherical` joints and `<mimic>` are rejected with
+//!   dynamics; a URDF `<limit>` is mandatory on revolute joints and often a controller's
+//!   range rather than a hard stop, and it carries no restitution: give stops with
+//!   [`crate::JointSpec::with_limit`] where a mechanism has them). `floating`, `planar` and `spherical` joints and `<mimic>` are rejected with
 //!   [`MultibodyError::Unsupported`] naming the joint: silently ignoring them would give wrong
 //!   dynamics.
 //! - The root link (the one that is no joint's child) is the base, fixed or floating as asked.
