@@ -32,6 +32,10 @@ const LOCATE_DONE: f64 = 0.999;
 /// dominos 3.6 ε_c).
 const STRUCK_FRACTION: f64 = 1e-2;
 
+/// An island step ending within this fraction of the nominal step of a grid point of the
+/// island-step grid ended on it (rounding). Default `1e-6`.
+const GRID_SLACK: f64 = 1e-6;
+
 /// Fraction of the envelope left above the rest gap that turning may use up within one
 /// island step: the rest covers the angular acceleration within the step (the step is chosen
 /// from the speeds at its start). Default `0.5`.
@@ -54,6 +58,8 @@ pub(super) struct HeldPair {
     /// yet stepped: its approach is the strike its island's impulsive solve is about to stop,
     /// not a motion of the coming step, so only rotation counts toward releasing it.
     struck: bool,
+    /// The last step was cut short by a slip → stick transition.
+    cut: bool,
 }
 
 /// The islands' state in a world.
@@ -130,6 +136,30 @@ impl World {
             (TURN_STEP_SAFETY * self.envelope_left() / speed).clamp(s.min_step, s.step)
         } else {
             s.step
+        }
+    }
+
+    /// A full island step that ends on the world's grid of island steps (the multiples of
+    /// [`SustainedSettings::step`]): islands whose steps end at one instant take them in one
+    /// loop step, which advances every moving body once, instead of one loop step each.
+    /// At most the nominal step; an island off the grid (it joined late, or a transition cut
+    /// its last step) takes a shorter step back to it.
+    fn aligned_step(&self) -> f64 {
+        let step = self.islands.settings.step;
+        let t = self.time;
+        let mut next = ((t / step).floor() + 1.0) * step;
+        // A step that ended on the grid ends a rounding away from it.
+        if next - t <= GRID_SLACK * step {
+            next += step;
+        }
+        // Back to the grid in one step of at least half the nominal one, or in two equal
+        // steps (a tiny step costs a solve like any other, and its warm start is scaled from
+        // a step a thousand times longer).
+        let left = (next - t).min(step);
+        if left >= 0.5 * step {
+            left
+        } else {
+            0.5 * (left + step)
         }
     }
 
@@ -433,6 +463,18 @@ impl World {
                 .filter(|(p, _)| island.pairs.binary_search(p).is_ok())
                 .map(|&(_, turn)| self.rotation_step(turn))
                 .fold(settings.step, f64::min);
+            // A full step ends on the island-step grid, unless the island's last step was
+            // cut by a transition (it is in the middle of one: realigning would cost a step
+            // at every cut).
+            let was_cut = island
+                .pairs
+                .iter()
+                .any(|p| self.islands.held.get(p).is_some_and(|held| held.cut));
+            let h0 = if h0 >= settings.step && !was_cut {
+                self.aligned_step()
+            } else {
+                h0
+            };
             for p in &island.pairs {
                 let held = self
                     .islands
@@ -450,6 +492,7 @@ impl World {
             for p in &island.pairs {
                 if let Some(held) = self.islands.held.get_mut(p) {
                     held.span = h;
+                    held.cut = h < h0 * (1.0 - 1e-12);
                     held.struck = false;
                 }
             }
