@@ -16,11 +16,9 @@ fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/meshes")
 }
 
-/// A fresh file path under the system temp dir, unique per test.
-fn temp_file(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("impulse-cli-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+/// A scratch directory for one test's files (removed when the test ends).
+fn scratch(test: &str) -> common::Scratch {
+    common::Scratch::new(&format!("massprops-{test}"))
 }
 
 fn run(args: &[&str]) -> Output {
@@ -70,7 +68,8 @@ fn non_convex_genus_one_frame_matches_box_minus_hole() {
 #[test]
 fn geodesic_sphere_level_6_is_within_the_polyhedral_error() {
     let mesh = primitives::geodesic_sphere_mesh(6, 1.0).unwrap();
-    let path = temp_file("geodesic6.obj");
+    let dir = scratch("geodesic");
+    let path = dir.join("geodesic6.obj");
     obj::write(&mesh, &path).unwrap();
     let out = run(&["massprops", path.to_str().unwrap()]);
     assert!(out.ok, "{}", out.stderr);
@@ -102,7 +101,8 @@ fn geodesic_sphere_level_6_is_within_the_polyhedral_error() {
 fn an_open_mesh_is_refused_naming_the_problem() {
     let cube = primitives::cuboid_mesh(DVec3::ONE).unwrap();
     let open = PolyMesh::new(cube.vertices().to_vec(), cube.faces().take(5)).unwrap();
-    let path = temp_file("open.obj");
+    let dir = scratch("open");
+    let path = dir.join("open.obj");
     obj::write(&open, &path).unwrap();
     let out = run(&["massprops", path.to_str().unwrap()]);
     assert!(!out.ok);
@@ -130,7 +130,8 @@ fn bad_arguments_and_files_are_errors_not_panics() {
         assert!(out.stderr.contains(needle), "{args:?}: {}", out.stderr);
         assert!(!out.stderr.contains("panicked"), "{}", out.stderr);
     }
-    let bad = temp_file("bad.obj");
+    let dir = scratch("bad");
+    let bad = dir.join("bad.obj");
     std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap();
     let out = run(&["massprops", bad.to_str().unwrap()]);
     assert!(

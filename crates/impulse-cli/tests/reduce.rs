@@ -35,8 +35,7 @@ fn static_response_matches_full_model_under_a_small_load() {
 
 #[test]
 fn simulation_writes_a_trajectory_with_the_run_columns() {
-    let dir = std::env::temp_dir().join(format!("impulse-reduce-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::Scratch::new("reduce-trajectory");
     let csv = dir.join("arm.csv");
     let out = impulse(&[
         "reduce",
@@ -69,7 +68,8 @@ fn bad_input_names_the_problem() {
         "{}",
         out.stderr
     );
-    let bad = std::env::temp_dir().join(format!("impulse-reduce-bad-{}.ron", std::process::id()));
+    let dir = common::Scratch::new("reduce-bad");
+    let bad = dir.join("bad.ron");
     std::fs::write(
         &bad,
         "Mechanism(links: [Link(name: \"a\")], joints: [], end_effectors: [\"a\"])",

@@ -1,6 +1,9 @@
 //! End-to-end tests of `impulse run`: the binary on bundled scenes, with its outputs checked
 //! against the scene's physics (a two-ball collision with a closed form) and its errors.
 
+mod common;
+
+use common::Scratch;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -8,10 +11,8 @@ fn scenes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/scenes")
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("impulse-run-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn temp_dir(name: &str) -> Scratch {
+    Scratch::new(&format!("run-{name}"))
 }
 
 fn impulse(args: &[&str]) -> (bool, String, String) {

@@ -1,6 +1,36 @@
 //! What the end-to-end tests of the `impulse` binary share.
+// Each test binary uses part of this module.
+#![allow(dead_code)]
 
+use std::path::{Path, PathBuf};
 use std::process::Command;
+
+/// A directory of its own under the system's temp dir (unique to this process and `name`),
+/// removed with everything a test wrote in it when dropped, also when the test fails: a test
+/// run leaves nothing behind.
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    /// Creates the directory `impulse-<name>-<pid>` in the temp dir.
+    pub fn new(name: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("impulse-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
 
 /// The outcome of one run of the binary.
 pub struct Output {
