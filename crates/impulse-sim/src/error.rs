@@ -62,6 +62,9 @@ pub enum SimError {
         /// The handle, as `#slot.generation`.
         handle: String,
     },
+    /// A collision involving a multibody link could not be resolved (`crate::articulated`).
+    #[error("link collision: {0}")]
+    LinkCollision(String),
     /// The simulation cannot continue.
     #[error("t = {time}: {message}")]
     Runtime {

@@ -38,11 +38,16 @@
 //! - scene descriptions in RON, with validation that names the body and field, and builders
 //!   that make the same descriptions in code ([`scene`]);
 //! - an independent penetration monitor ([`monitor`]);
-//! - recording at a fixed frame rate, trajectory hashes, CSV and JSON ([`record`]).
+//! - recording at a fixed frame rate, trajectory hashes, CSV and JSON ([`record`]);
+//! - collisions of multibody links with rigid bodies, fixed bodies and other multibodies'
+//!   links (thesis §5.3: K from the impulse-space articulated-body recursion, the impulse from
+//!   `impulse-response`, propagation through the tree) ([`articulated`]). Multibodies are not
+//!   yet members of a [`World`] (issue 13).
 //!
 //! **Must not know** command lines, terminals or plotting: those belong to `impulse-cli`.
 #![forbid(unsafe_code)]
 
+pub mod articulated;
 pub mod body;
 mod build;
 mod builder;

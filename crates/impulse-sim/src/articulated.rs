@@ -1,0 +1,181 @@
+//! Collisions involving links of articulated bodies (thesis §5.3): a contact on a link of a
+//! multibody against a free rigid body, a fixed body, or a link of another multibody.
+//!
+//! The collision matrix of the contact is the sum of the two sides' (eq. 5.14 for a link:
+//! three test impulses through the impulse-space articulated-body recursion of
+//! `impulse_multibody::ImpulseDynamics`; eq. 3.4 for a rigid body). The impulse is integrated
+//! through the collision by the same chapter-3 code as rigid bodies (`impulse_response`, Coulomb
+//! friction, Stronge's restitution), blind to how K was made, and then spread over each
+//! multibody's tree (Fig. 5.10 propagateImpulse) or applied to the rigid body (eqs. 3.1, 3.2).
+//!
+//! **Must not know** how contacts are found (that is the world's) or how a multibody is
+//! integrated between collisions.
+
+use glam::{DMat3, DVec3};
+use impulse_multibody::{ImpulseDynamics, LinkId, Model, Workspace};
+use impulse_response::{Body, CollisionMatrix, ContactFrame, Response, Restitution, Settings};
+
+use crate::error::SimError;
+
+/// One side of a collision.
+#[derive(Debug)]
+pub enum Collider<'a> {
+    /// A link of a multibody at configuration `q` with velocity `v` (changed in place).
+    Link {
+        /// The multibody.
+        model: &'a Model,
+        /// Its configuration (nq).
+        q: &'a [f64],
+        /// Its velocity (nv), changed by the impulse.
+        v: &'a mut [f64],
+        /// The link struck.
+        link: LinkId,
+    },
+    /// A free rigid body (velocities changed in place).
+    Rigid {
+        /// Mass (kg).
+        mass: f64,
+        /// Inertia tensor about the centre of mass, world axes (kg·m²).
+        inertia: DMat3,
+        /// Centre of mass (world).
+        com: DVec3,
+        /// Velocity of the centre of mass.
+        velocity: &'a mut DVec3,
+        /// Angular velocity (world).
+        omega: &'a mut DVec3,
+    },
+    /// An immovable body (the ground, a wall).
+    Fixed,
+}
+
+/// A resolved collision: the chapter-3 response (impulse on side `a`, collision frame) and its
+/// frame.
+#[derive(Debug)]
+pub struct LinkCollision {
+    /// The collision integrator's result.
+    pub response: Response,
+    /// The collision frame (its z axis the normal, from side `b` toward side `a`).
+    pub frame: ContactFrame,
+}
+
+impl LinkCollision {
+    /// The impulse on side `a` in world axes (side `b` receives its negative).
+    #[must_use]
+    pub fn impulse_world(&self) -> DVec3 {
+        self.response.impulse_world(&self.frame)
+    }
+}
+
+/// What one side contributes: its contact-point velocity (world) and its K (world axes).
+struct Side {
+    velocity: DVec3,
+    k: DMat3,
+}
+
+fn bad(what: &str, e: impl std::fmt::Display) -> SimError {
+    SimError::LinkCollision(format!("{what}: {e}"))
+}
+
+impl Collider<'_> {
+    fn side(&self, x: DVec3, frame: &ContactFrame) -> Result<Side, SimError> {
+        match self {
+            Collider::Link { model, q, v, link } => {
+                let mut ws = Workspace::new(model);
+                ws.update_kinematics(model, q, v)
+                    .map_err(|e| bad("kinematics", e))?;
+                let mut imp = ImpulseDynamics::new(model, q).map_err(|e| bad("K", e))?;
+                // K in collision-frame axes, back to world axes (Q·K·Qᵀ) to sum with the other
+                // side's.
+                let kc = imp
+                    .collision_matrix_world(model, *link, x, frame.axes())
+                    .map_err(|e| bad("K", e))?;
+                let qm = frame.axes();
+                Ok(Side {
+                    velocity: ws.point_velocity(model, *link, x),
+                    k: qm * kc * qm.transpose(),
+                })
+            }
+            Collider::Rigid {
+                mass,
+                inertia,
+                com,
+                velocity,
+                omega,
+            } => {
+                let body = Body::moving(*mass, *inertia).map_err(|e| bad("rigid body", e))?;
+                let r = x - *com;
+                Ok(Side {
+                    velocity: **velocity + omega.cross(r),
+                    k: body.point_compliance(r),
+                })
+            }
+            Collider::Fixed => Ok(Side {
+                velocity: DVec3::ZERO,
+                k: DMat3::ZERO,
+            }),
+        }
+    }
+
+    /// Applies impulse `p` (world) at `x`.
+    fn apply(&mut self, x: DVec3, p: DVec3) -> Result<(), SimError> {
+        match self {
+            Collider::Link { model, q, v, link } => {
+                let mut imp = ImpulseDynamics::new(model, q).map_err(|e| bad("propagation", e))?;
+                let mut dv = vec![0.0; model.nv()];
+                imp.propagate_impulse(model, *link, x, p, &mut dv)
+                    .map_err(|e| bad("propagation", e))?;
+                for (vi, d) in v.iter_mut().zip(&dv) {
+                    *vi += d;
+                }
+            }
+            Collider::Rigid {
+                mass,
+                inertia,
+                com,
+                velocity,
+                omega,
+            } => {
+                let body = Body::moving(*mass, *inertia).map_err(|e| bad("rigid body", e))?;
+                let (dv, dw) = body.velocity_change(x - *com, p);
+                **velocity += dv;
+                **omega += dw;
+            }
+            Collider::Fixed => {}
+        }
+        Ok(())
+    }
+}
+
+/// Resolves a collision at world point `x` with normal `normal` (from `b` toward `a`), friction
+/// `mu` and restitution `e` (Stronge's law): K = K_a + K_b, the impulse integrated through the
+/// collision, +p applied to `a` and −p to `b`. The two sides must not be links of one
+/// multibody (their responses would be coupled; self-collision is not supported).
+///
+/// # Errors
+/// [`SimError::LinkCollision`] naming what failed: a bad normal, a rigid body's mass properties, a
+/// link of another model, a contact that does not approach, or the collision integrator's
+/// own errors. Nothing is changed on error.
+pub fn collide(
+    a: &mut Collider<'_>,
+    b: &mut Collider<'_>,
+    x: DVec3,
+    normal: DVec3,
+    mu: f64,
+    e: f64,
+) -> Result<LinkCollision, SimError> {
+    let frame = ContactFrame::from_normal(normal).map_err(|err| bad("normal", err))?;
+    let (sa, sb) = (a.side(x, &frame)?, b.side(x, &frame)?);
+    let k_contact = frame.axes().transpose() * (sa.k + sb.k) * frame.axes();
+    let k = CollisionMatrix::new(k_contact).map_err(|err| bad("collision matrix", err))?;
+    let u0 = frame.to_contact(sa.velocity - sb.velocity);
+    let response =
+        impulse_response::resolve(&k, u0, mu, e, Restitution::Stronge, &Settings::default())
+            .map_err(|err| bad("response", err))?;
+    let p = response.impulse_world(&frame);
+    a.apply(x, p)?;
+    b.apply(x, -p)?;
+    Ok(LinkCollision { response, frame })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,315 @@
+//! Link collisions against conservation laws and the dense joint-space reference.
+
+use glam::{DMat3, DQuat, DVec3};
+use impulse_geom::{Pose, SpatialInertia};
+use impulse_multibody::{
+    BaseKind, JointSpec, LinkId, Mat, Model, ModelBuilder, Workspace, mass_matrix,
+};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+
+use super::*;
+
+/// Momentum balances and the joint-space reference, relative to their scale: the
+/// recursions and the dense solve differ only in rounding.
+const REL: f64 = 1e-10;
+
+fn unit(r: &mut Xoshiro256PlusPlus) -> DVec3 {
+    loop {
+        let v = DVec3::new(
+            r.random_range(-1.0..1.0),
+            r.random_range(-1.0..1.0),
+            r.random_range(-1.0..1.0),
+        );
+        if (0.1..1.0).contains(&v.length()) {
+            return v.normalize();
+        }
+    }
+}
+
+/// A random tree of 1–6 moving links on a floating base: revolute and prismatic joints about
+/// random axes, random offsets and inertias; with a random state.
+fn random_tree(r: &mut Xoshiro256PlusPlus) -> (Model, Vec<f64>, Vec<f64>) {
+    let n = r.random_range(1..=6);
+    let mut b = ModelBuilder::new(BaseKind::Floating);
+    let inertia = |r: &mut Xoshiro256PlusPlus| {
+        let m = r.random_range(0.2..5.0);
+        let d = DVec3::new(
+            r.random_range(0.01..0.2),
+            r.random_range(0.01..0.2),
+            r.random_range(0.01..0.2),
+        ) * m;
+        let rot = DMat3::from_quat(DQuat::from_axis_angle(unit(r), r.random_range(0.0..3.0)));
+        let com = unit(r) * r.random_range(0.0..0.2);
+        SpatialInertia::new(m, com, rot * DMat3::from_diagonal(d) * rot.transpose())
+    };
+    let base = inertia(r);
+    b.link("l0", base);
+    for i in 1..=n {
+        let parent = r.random_range(0..i);
+        let origin = Pose::new(
+            DQuat::from_axis_angle(unit(r), r.random_range(0.0..3.0)),
+            unit(r) * r.random_range(0.05..0.5),
+        );
+        let (p, c) = (format!("l{parent}"), format!("l{i}"));
+        let joint = if r.random_bool(0.7) {
+            JointSpec::revolute(&format!("j{i}"), &p, &c, origin, unit(r))
+        } else {
+            JointSpec::prismatic(&format!("j{i}"), &p, &c, origin, unit(r))
+        };
+        let li = inertia(r);
+        b.link(&c, li).joint(joint);
+    }
+    let model = b.build().expect("a valid random tree");
+    let mut q = model.neutral_configuration();
+    let rot = DQuat::from_axis_angle(unit(r), r.random_range(0.0..3.0));
+    let pos = unit(r) * r.random_range(0.0..1.0);
+    q[..7].copy_from_slice(&[pos.x, pos.y, pos.z, rot.x, rot.y, rot.z, rot.w]);
+    for x in &mut q[7..] {
+        *x = r.random_range(-1.0..1.0);
+    }
+    let v: Vec<f64> = (0..model.nv()).map(|_| r.random_range(-2.0..2.0)).collect();
+    (model, q, v)
+}
+
+/// Linear momentum and angular momentum about the world origin of a multibody.
+fn momentum(model: &Model, q: &[f64], v: &[f64]) -> (DVec3, DVec3) {
+    let mut ws = Workspace::new(model);
+    ws.update_kinematics(model, q, v).unwrap();
+    let m = ws.momentum(model);
+    (m.f, m.tau)
+}
+
+fn kinetic(model: &Model, q: &[f64], v: &[f64]) -> f64 {
+    let mut ws = Workspace::new(model);
+    ws.update_kinematics(model, q, v).unwrap();
+    ws.kinetic_energy(model)
+}
+
+/// M⁻¹·Jᵀ·p from the dense joint-space mass matrix (CRBA) and the contact Jacobian J of the
+/// point `x` on `link` (its columns are the point's velocities for unit joint velocities).
+fn dense_response(model: &Model, q: &[f64], link: LinkId, x: DVec3, p: DVec3) -> Vec<f64> {
+    let nv = model.nv();
+    let mut ws = Workspace::new(model);
+    let mut m = Mat::<f64>::zeros(nv, nv);
+    mass_matrix(model, &mut ws, q, &mut m).unwrap();
+    let mut rhs = vec![0.0; nv];
+    for (k, out) in rhs.iter_mut().enumerate() {
+        let mut e = vec![0.0; nv];
+        e[k] = 1.0;
+        ws.update_kinematics(model, q, &e).unwrap();
+        *out = ws.point_velocity(model, link, x).dot(p);
+    }
+    // Gaussian elimination with partial pivoting on the dense M.
+    let mut a: Vec<Vec<f64>> = (0..nv)
+        .map(|i| (0..nv).map(|j| m[(i, j)]).collect())
+        .collect();
+    for col in 0..nv {
+        let piv = (col..nv)
+            .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
+            .unwrap();
+        a.swap(col, piv);
+        rhs.swap(col, piv);
+        let pivot_row = a[col].clone();
+        for row in col + 1..nv {
+            let f = a[row][col] / pivot_row[col];
+            for (x, p) in a[row][col..].iter_mut().zip(&pivot_row[col..]) {
+                *x -= f * p;
+            }
+            rhs[row] -= f * rhs[col];
+        }
+    }
+    let mut x_out = vec![0.0; nv];
+    for row in (0..nv).rev() {
+        let s: f64 = (row + 1..nv).map(|k| a[row][k] * x_out[k]).sum();
+        x_out[row] = (rhs[row] - s) / a[row][row];
+    }
+    x_out
+}
+
+fn close(a: &[f64], b: &[f64]) -> bool {
+    let scale = b.iter().fold(1e-12_f64, |m, x| m.max(x.abs()));
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() <= REL * scale)
+}
+
+fn close3(a: DVec3, b: DVec3, scale: f64) -> bool {
+    (a - b).length() <= REL * scale.max(1e-12)
+}
+
+/// A point near a random link, and that link.
+fn contact_on(model: &Model, q: &[f64], r: &mut Xoshiro256PlusPlus) -> (LinkId, DVec3) {
+    let link = model
+        .link_id(&format!("l{}", r.random_range(0..model.link_count())))
+        .unwrap();
+    let mut ws = Workspace::new(model);
+    ws.update_kinematics(model, q, &vec![0.0; model.nv()])
+        .unwrap();
+    let at = ws.link_pose(model, link).translation + unit(r) * r.random_range(0.0..0.2);
+    (link, at)
+}
+
+#[test]
+fn random_link_ball_collisions_conserve_momentum_and_match_the_dense_reference() {
+    let mut r = Xoshiro256PlusPlus::seed_from_u64(5);
+    let mut worst_energy = f64::NEG_INFINITY;
+    for case in 0..8000 {
+        let (model, q, v0) = random_tree(&mut r);
+        let (link, x) = contact_on(&model, &q, &mut r);
+        let n = unit(&mut r);
+        let (mass, radius) = (r.random_range(0.1..10.0), r.random_range(0.02..0.2));
+        let inertia = DMat3::IDENTITY * (0.4 * mass * radius * radius);
+        let com = x - n * radius;
+        let mut velocity = unit(&mut r) * r.random_range(0.0..3.0);
+        let mut omega = unit(&mut r) * r.random_range(0.0..10.0);
+        // Make the contact approach: the link's point moves toward the ball along −n.
+        let mut ws = Workspace::new(&model);
+        ws.update_kinematics(&model, &q, &v0).unwrap();
+        let u = ws.point_velocity(&model, link, x) - (velocity + omega.cross(x - com));
+        let s = u.dot(n) + r.random_range(0.05..2.0);
+        velocity += n * s;
+        let (mu, e) = (r.random_range(0.0..2.0), r.random_range(0.0..=1.0));
+
+        let ball = |v: DVec3, w: DVec3| (mass * v, com.cross(mass * v) + inertia * w);
+        let (l0, h0) = momentum(&model, &q, &v0);
+        let (bl0, bh0) = ball(velocity, omega);
+        let e0 = kinetic(&model, &q, &v0)
+            + 0.5 * mass * velocity.length_squared()
+            + 0.5 * omega.dot(inertia * omega);
+        let mut v = v0.clone();
+        let hit = {
+            let mut a = Collider::Link {
+                model: &model,
+                q: &q,
+                v: &mut v,
+                link,
+            };
+            let mut b = Collider::Rigid {
+                mass,
+                inertia,
+                com,
+                velocity: &mut velocity,
+                omega: &mut omega,
+            };
+            collide(&mut a, &mut b, x, n, mu, e).unwrap_or_else(|err| panic!("case {case}: {err}"))
+        };
+        let p = hit.impulse_world();
+        let (l1, h1) = momentum(&model, &q, &v);
+        let (bl1, bh1) = ball(velocity, omega);
+        let scale = p.length() * (1.0 + x.length())
+            + l0.length()
+            + h0.length()
+            + bl0.length()
+            + bh0.length();
+        assert!(
+            close3(l1 + bl1, l0 + bl0, scale),
+            "case {case}: linear momentum"
+        );
+        assert!(
+            close3(h1 + bh1, h0 + bh0, scale),
+            "case {case}: angular momentum"
+        );
+        assert!(
+            close3(l1 - l0, p, scale),
+            "case {case}: the tree's linear momentum change is not p"
+        );
+        assert!(
+            close3(h1 - h0, x.cross(p), scale),
+            "case {case}: the tree's angular momentum change is not x × p"
+        );
+        let e1 = kinetic(&model, &q, &v)
+            + 0.5 * mass * velocity.length_squared()
+            + 0.5 * omega.dot(inertia * omega);
+        worst_energy = worst_energy.max((e1 - e0) / e0);
+        assert!(e1 <= e0 * (1.0 + 1e-9), "case {case}: energy {e0} -> {e1}");
+        let dv: Vec<f64> = v.iter().zip(&v0).map(|(a, b)| a - b).collect();
+        let reference = dense_response(&model, &q, link, x, p);
+        assert!(
+            close(&dv, &reference),
+            "case {case}: Δv {dv:?} against M⁻¹Jᵀp {reference:?}"
+        );
+    }
+    eprintln!("8000 link–ball collisions: largest relative energy change {worst_energy:e}");
+}
+
+#[test]
+fn random_link_link_collisions_conserve_momentum_and_match_the_dense_reference() {
+    let mut r = Xoshiro256PlusPlus::seed_from_u64(6);
+    for case in 0..2000 {
+        let (ma, qa, va0) = random_tree(&mut r);
+        let (mb, qb, vb0) = random_tree(&mut r);
+        let (la, x) = contact_on(&ma, &qa, &mut r);
+        let lb = mb
+            .link_id(&format!("l{}", r.random_range(0..mb.link_count())))
+            .unwrap();
+        let n = unit(&mut r);
+        let mut vb = vb0.clone();
+        // Approach: give tree b's base a velocity along n (its point then moves with it).
+        let point = |m: &Model, q: &[f64], v: &[f64], l: LinkId| {
+            let mut ws = Workspace::new(m);
+            ws.update_kinematics(m, q, v).unwrap();
+            ws.point_velocity(m, l, x)
+        };
+        let u = point(&ma, &qa, &va0, la) - point(&mb, &qb, &vb, lb);
+        let s = u.dot(n) + r.random_range(0.05..2.0);
+        // The base's linear velocity is in base coordinates (v[..3]).
+        let base_rot = DQuat::from_xyzw(qb[3], qb[4], qb[5], qb[6]);
+        let push = base_rot.inverse() * (n * s);
+        vb[0] += push.x;
+        vb[1] += push.y;
+        vb[2] += push.z;
+        let vb0 = vb.clone();
+        let (mu, e) = (r.random_range(0.0..2.0), r.random_range(0.0..=1.0));
+        let (la0, ha0) = momentum(&ma, &qa, &va0);
+        let (lb0, hb0) = momentum(&mb, &qb, &vb0);
+        let e0 = kinetic(&ma, &qa, &va0) + kinetic(&mb, &qb, &vb0);
+        let mut va = va0.clone();
+        let hit = {
+            let mut a = Collider::Link {
+                model: &ma,
+                q: &qa,
+                v: &mut va,
+                link: la,
+            };
+            let mut b = Collider::Link {
+                model: &mb,
+                q: &qb,
+                v: &mut vb,
+                link: lb,
+            };
+            match collide(&mut a, &mut b, x, n, mu, e) {
+                Ok(hit) => hit,
+                // A link welded to nothing that moves cannot be struck; none here (floating
+                // bases), so any error is a failure.
+                Err(err) => panic!("case {case}: {err}"),
+            }
+        };
+        let p = hit.impulse_world();
+        let (la1, ha1) = momentum(&ma, &qa, &va);
+        let (lb1, hb1) = momentum(&mb, &qb, &vb);
+        let scale = p.length() * (1.0 + x.length())
+            + la0.length()
+            + ha0.length()
+            + lb0.length()
+            + hb0.length();
+        assert!(
+            close3(la1 + lb1, la0 + lb0, scale),
+            "case {case}: linear momentum"
+        );
+        assert!(
+            close3(ha1 + hb1, ha0 + hb0, scale),
+            "case {case}: angular momentum"
+        );
+        let e1 = kinetic(&ma, &qa, &va) + kinetic(&mb, &qb, &vb);
+        assert!(e1 <= e0 * (1.0 + 1e-9), "case {case}: energy {e0} -> {e1}");
+        let dva: Vec<f64> = va.iter().zip(&va0).map(|(a, b)| a - b).collect();
+        let dvb: Vec<f64> = vb.iter().zip(&vb0).map(|(a, b)| a - b).collect();
+        assert!(
+            close(&dva, &dense_response(&ma, &qa, la, x, p)),
+            "case {case}: tree a"
+        );
+        assert!(
+            close(&dvb, &dense_response(&mb, &qb, lb, x, -p)),
+            "case {case}: tree b"
+        );
+    }
+}
