@@ -407,10 +407,10 @@ pub fn fig7(
         ];
         // Single model, then blended: the fixed point of the statics, then Algorithm 4.
         let (see, alpha) = blended_statics(&single, &ft, &single_start)?;
-        let internal = single.internal_poses(&see, &alpha);
+        let internal = single.try_internal_poses(&see, &alpha)?;
         let sp = assemble(m, &single.models[0], &see, &internal);
         let (bee, alpha) = blended_statics(&set, &ft, &start)?;
-        let internal = set.internal_poses(&bee, &alpha);
+        let internal = set.try_internal_poses(&bee, &alpha)?;
         let bp = assemble(m, &set.models[0], &bee, &internal);
         let pose_err = |p: &Pose| scaled_norm(&(full[link].inverse() * *p).log(), r);
 
@@ -497,7 +497,7 @@ pub fn set_errors(
     let f = direction * load;
     ft[ee] = [f.x, f.y, f.z, 0.0, 0.0, 0.0];
     let (poses, alpha) = blended_statics(set, &ft, start)?;
-    let internal = set.internal_poses(&poses, &alpha);
+    let internal = set.try_internal_poses(&poses, &alpha)?;
     let links = assemble(m, &set.models[0], &poses, &internal);
     let r = m.bounding_radius();
     let error = |l: usize| scaled_norm(&(full[l].inverse() * links[l]).log(), r);
