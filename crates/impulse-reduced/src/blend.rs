@@ -38,6 +38,8 @@
 //!   full solution as the worse neighbouring model alone, now 1.15 and 0.97 (the worst link is
 //!   then the end effector). See "Internal links mid-way" in [`crate::study`].
 
+use std::sync::Mutex;
+
 use faer::{Mat, Side};
 use impulse_geom::{Pose, Twist};
 
@@ -293,7 +295,16 @@ pub struct BlendedModel {
     /// Models that may carry weight ([`compact_shepard_weights`]); [`SUPPORT`] (all, the
     /// paper) unless changed.
     pub support: Option<usize>,
+    /// The weights, `K̄` and `H̄_e` of the last [`BlendedModel::blend`]: functions of the
+    /// weights alone, so [`BlendedModel::internal_poses`] called with the same weights (as
+    /// after [`BlendedModel::step`]) reuses them instead of blending and inverting the
+    /// compliance again.
+    last: Mutex<Option<LinkBlend>>,
 }
+
+/// What Algorithm 4 needs from a blend (see [`BlendedModel::internal_poses`]): weights α,
+/// blended stiffness `K̄`, blended end-effector references `H̄_e`.
+type LinkBlend = (Vec<f64>, Mat<f64>, Vec<Pose>);
 
 /// The blended end-effector system at one state (Algorithm 5's per-step quantities).
 pub struct Blend {
@@ -344,6 +355,7 @@ impl BlendedModel {
             radius,
             power: SHEPARD_POWER,
             support: SUPPORT,
+            last: Mutex::new(None),
         })
     }
 
@@ -415,6 +427,9 @@ impl BlendedModel {
             })
             .collect();
         let reference = self.blended_reference(&alpha);
+        if let Ok(mut last) = self.last.lock() {
+            *last = Some((alpha.clone(), stiffness.clone(), reference.clone()));
+        }
         Ok(Blend {
             alpha,
             compliance,
@@ -442,6 +457,12 @@ impl BlendedModel {
                 alpha.len(),
                 self.models.len()
             )));
+        }
+        if let Ok(last) = self.last.lock()
+            && let Some((a, stiffness, reference)) = last.as_ref()
+            && a.as_slice() == alpha
+        {
+            return Ok(self.place_internal(ee, alpha, reference, stiffness));
         }
         let (_, stiffness) = self.blended_compliance(alpha)?;
         Ok(self.place_internal(ee, alpha, &self.blended_reference(alpha), &stiffness))
