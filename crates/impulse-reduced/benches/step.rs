@@ -114,7 +114,7 @@ fn blended(c: &mut Criterion) {
         c.bench_function(&format!("helix-200 blended/{k} models"), |b| {
             b.iter(|| {
                 let blend = set.blend(&ee).unwrap();
-                set.internal_poses(&ee, &blend.alpha)
+                set.internal_poses_of(&ee, &blend)
             });
         });
     }

@@ -19,9 +19,26 @@
 //!   vector brings its Rayleigh quotient as eigenvalue.
 //! - **Poses** (eqs. 26–28, Algorithm 4): `H̄ = H⁽¹⁾ exp(Σ_{j≥2} α_j log(H⁽¹⁾⁻¹ H⁽ʲ⁾))`, model 1
 //!   the closest. **\[fix\]** Algorithm 4 evaluates model 1 too (it is the base of eq. 28).
-//!   **\[choose\]** each model places the internal links for where the end effectors actually
-//!   are: `ᵉw⁽ⁱ⁾ = K⁽ⁱ⁾ ξ_e⁽ⁱ⁾` with `ξ_e⁽ⁱ⁾ = log(H_e⁽ⁱ⁾⁻¹ H_e)`, so at a sample point the
-//!   blend reproduces that model's full static solution.
+//!   **\[choose\]** the internal links are placed the way the blended end effectors are, as
+//!   one blended linear model: `H_l = H̄_l exp(T̄_l K̄ ξ̄)` with `ξ̄ = log(H̄_e⁻¹ H_e)` (eq. 24's
+//!   displacement), `H̄_l` eq. 28 over the models' reference poses of link l (as `H̄_e` over
+//!   theirs) and `T̄_l = Σ αᵢ T_l⁽ⁱ⁾` (eq. 22's twist maps blended linearly). At a sample point
+//!   this is that model's own Algorithm 4, `H_l⁽ⁱ⁾ exp(T_l⁽ⁱ⁾ K⁽ⁱ⁾ ξ_e⁽ⁱ⁾)`, so the blend
+//!   reproduces its full static solution.
+//!
+//!   Not each model's own wrench `ᵉw⁽ⁱ⁾ = K⁽ⁱ⁾ log(H_e⁽ⁱ⁾⁻¹ H_e)` (Algorithm 4 read per model,
+//!   this crate's choice until the mid-way links were measured): between two samples the
+//!   blended end effector lies on the blended model's manifold `H̄_e exp(C̄ w)`, which passes
+//!   through the chord of eq. 28 between the samples' reference poses, while each model's
+//!   manifold `H_e⁽ⁱ⁾ exp(C⁽ⁱ⁾ w)` is its tangent at its own sample. The two part along the
+//!   mechanism's near-rigid directions (compliance eigenvalues 1e-8 to 1e-6 of the largest on
+//!   the "Y"), by ~1e-3 of the bounding radius mid-way, and `K⁽ⁱ⁾` turns that into wrenches
+//!   tens of times the load (1e4 N under 253 N on the "Y"): mid-way the links were up to 25
+//!   times (the "Y" at 253.1 N: 1.73e-2) and 86 times (the ladder-36 at 5 N) as far from the
+//!   full solution as the worse neighbouring model alone, now 1.15 and 0.97 (the worst link is
+//!   then the end effector). See "Internal links mid-way" in [`crate::study`].
+
+use std::sync::Mutex;
 
 use faer::{Mat, Side};
 use impulse_geom::{Pose, Twist};
@@ -278,7 +295,16 @@ pub struct BlendedModel {
     /// Models that may carry weight ([`compact_shepard_weights`]); [`SUPPORT`] (all, the
     /// paper) unless changed.
     pub support: Option<usize>,
+    /// The weights, `K̄` and `H̄_e` of the last [`BlendedModel::blend`]: functions of the
+    /// weights alone, so [`BlendedModel::internal_poses`] called with the same weights (as
+    /// after [`BlendedModel::step`]) reuses them instead of blending and inverting the
+    /// compliance again.
+    last: Mutex<Option<LinkBlend>>,
 }
+
+/// What Algorithm 4 needs from a blend (see [`BlendedModel::internal_poses`]): weights α,
+/// blended stiffness `K̄`, blended end-effector references `H̄_e`.
+type LinkBlend = (Vec<f64>, Mat<f64>, Vec<Pose>);
 
 /// The blended end-effector system at one state (Algorithm 5's per-step quantities).
 pub struct Blend {
@@ -329,6 +355,7 @@ impl BlendedModel {
             radius,
             power: SHEPARD_POWER,
             support: SUPPORT,
+            last: Mutex::new(None),
         })
     }
 
@@ -374,16 +401,7 @@ impl BlendedModel {
             let b = blended(which, mats);
             Ok(pinv_rank(b.as_ref(), rank, Tsvd::default(), 0.0, tol::RANK_GAP, name)?.inverse)
         };
-        let compliance = blended(0, self.models.iter().map(|m| &m.compliance).collect());
-        let stiffness = pinv_rank(
-            compliance.as_ref(),
-            rank,
-            Tsvd::default(),
-            0.0,
-            tol::RANK_GAP,
-            "blended compliance",
-        )?
-        .inverse;
+        let (compliance, stiffness) = self.blended_compliance(&alpha)?;
         let mass = inv(
             1,
             self.models.iter().map(|m| &m.accelerability).collect(),
@@ -408,12 +426,10 @@ impl BlendedModel {
                     .sum()
             })
             .collect();
-        let reference = (0..ee.len())
-            .map(|e| {
-                let poses: Vec<Pose> = self.models.iter().map(|m| m.reference[e]).collect();
-                blend_poses(&poses, &alpha)
-            })
-            .collect();
+        let reference = self.blended_reference(&alpha);
+        if let Ok(mut last) = self.last.lock() {
+            *last = Some((alpha.clone(), stiffness.clone(), reference.clone()));
+        }
         Ok(Blend {
             alpha,
             compliance,
@@ -425,11 +441,106 @@ impl BlendedModel {
         })
     }
 
-    /// Algorithm 4 (fixed): internal-link world poses for end effectors at `ee` with weights
-    /// `alpha`; one pose per `models[0].internal`.
+    /// Algorithm 4 (fixed, see the module doc): internal-link world poses for end effectors at
+    /// `ee` with weights `alpha`; one pose per `models[0].internal`. Blends the compliance
+    /// with `alpha` to form `K̄` (Algorithm 3, as [`BlendedModel::blend`]); a caller that has
+    /// the [`Blend`] of this state uses [`BlendedModel::internal_poses_of`] instead.
+    ///
+    /// # Errors
+    /// [`Error::Rank`] / [`Error::LinearAlgebra`] from the inversion of the blended compliance
+    /// (the same inversion as [`BlendedModel::blend`]'s with these weights);
+    /// [`Error::Argument`] unless there is one weight per model.
+    pub fn try_internal_poses(&self, ee: &[Pose], alpha: &[f64]) -> Result<Vec<Pose>, Error> {
+        if alpha.len() != self.models.len() {
+            return Err(Error::Argument(format!(
+                "{} weights for {} models",
+                alpha.len(),
+                self.models.len()
+            )));
+        }
+        if let Ok(last) = self.last.lock()
+            && let Some((a, stiffness, reference)) = last.as_ref()
+            && a.as_slice() == alpha
+        {
+            return Ok(self.place_internal(ee, alpha, reference, stiffness));
+        }
+        let (_, stiffness) = self.blended_compliance(alpha)?;
+        Ok(self.place_internal(ee, alpha, &self.blended_reference(alpha), &stiffness))
+    }
+
+    /// [`BlendedModel::try_internal_poses`], infallible: where the blended compliance cannot be
+    /// inverted ([`BlendedModel::blend`] reports that error for the same weights) the links are
+    /// placed at their blended reference poses `H̄_l` (no elastic displacement).
     #[must_use]
     pub fn internal_poses(&self, ee: &[Pose], alpha: &[f64]) -> Vec<Pose> {
-        // A model without weight adds nothing to eq. 28: it is not evaluated.
+        self.try_internal_poses(ee, alpha).unwrap_or_else(|_| {
+            let n = 6 * self.models[0].end_effectors.len();
+            self.place_internal(ee, alpha, &self.blended_reference(alpha), &Mat::zeros(n, n))
+        })
+    }
+
+    /// Blended end-effector reference poses `H̄_e` (eq. 28).
+    fn blended_reference(&self, alpha: &[f64]) -> Vec<Pose> {
+        (0..self.rest.len())
+            .map(|e| {
+                let poses: Vec<Pose> = self.models.iter().map(|m| m.reference[e]).collect();
+                blend_poses(&poses, alpha)
+            })
+            .collect()
+    }
+
+    /// The blended compliance `C̄` (Algorithm 3 at the rank of the closest model) and its
+    /// inverse `K̄` for weights `alpha`.
+    fn blended_compliance(&self, alpha: &[f64]) -> Result<(Mat<f64>, Mat<f64>), Error> {
+        let c = (0..alpha.len())
+            .max_by(|&a, &b| alpha[a].total_cmp(&alpha[b]))
+            .unwrap_or(0);
+        let rank = self.models[c].rank;
+        let eigs: Vec<&Eigen> = self.eig.iter().map(|e| &e[0]).collect();
+        let mats: Vec<&Mat<f64>> = self.models.iter().map(|m| &m.compliance).collect();
+        let compliance = blend_rank1(&eigs, &mats, alpha, rank);
+        let stiffness = pinv_rank(
+            compliance.as_ref(),
+            rank,
+            Tsvd::default(),
+            0.0,
+            tol::RANK_GAP,
+            "blended compliance",
+        )?
+        .inverse;
+        Ok((compliance, stiffness))
+    }
+
+    /// [`BlendedModel::internal_poses`] with the blend `b` of the same end-effector poses `ee`
+    /// (as from [`BlendedModel::blend`] or [`BlendedModel::step`]): its weights, `K̄` and
+    /// `H̄_e`.
+    #[must_use]
+    pub fn internal_poses_of(&self, ee: &[Pose], b: &Blend) -> Vec<Pose> {
+        self.place_internal(ee, &b.alpha, &b.reference, &b.stiffness)
+    }
+
+    /// Algorithm 4 as the blended model's own eq. 22: every internal link from the blended
+    /// end-effector state the way the end effectors themselves are, `H̄_l exp(T̄_l K̄ ξ̄)` with
+    /// `ξ̄ = log(H̄_e⁻¹ H_e)` (eq. 24's displacement), `H̄_l` eq. 28 over the models' reference
+    /// poses of link l and `T̄_l = Σ αᵢ T_l⁽ⁱ⁾` (eq. 22's twist maps, blended linearly).
+    fn place_internal(
+        &self,
+        ee: &[Pose],
+        alpha: &[f64],
+        reference: &[Pose],
+        stiffness: &Mat<f64>,
+    ) -> Vec<Pose> {
+        // ξ̄ = log(H̄_e⁻¹ H_e) and the blended elastic wrench K̄ ξ̄ (§6: w = K ξ).
+        let xi: Vec<f64> = ee
+            .iter()
+            .zip(reference)
+            .flat_map(|(h, r)| (r.inverse() * *h).log().to_array())
+            .collect();
+        let n = xi.len();
+        let w: Vec<f64> = (0..n)
+            .map(|r| (0..n).map(|c| stiffness[(r, c)] * xi[c]).sum())
+            .collect();
+        // A model without weight adds nothing to eq. 28 or to T̄: it is not evaluated.
         let (models, alpha): (Vec<&ReducedModel>, Vec<f64>) = self
             .models
             .iter()
@@ -437,25 +548,15 @@ impl BlendedModel {
             .filter(|(_, a)| **a > 0.0)
             .map(|(m, a)| (m, *a))
             .unzip();
-        let per_model: Vec<Vec<Pose>> = models
-            .iter()
-            .map(|m| {
-                // ξ_e⁽ⁱ⁾ = log(H_e⁽ⁱ⁾⁻¹ H_e), w⁽ⁱ⁾ = K⁽ⁱ⁾ ξ⁽ⁱ⁾.
-                let xi: Vec<f64> = ee
-                    .iter()
-                    .zip(&m.reference)
-                    .flat_map(|(h, hi)| (hi.inverse() * *h).log().to_array())
-                    .collect();
-                let w = crate::internal::equivalent_wrenches(m, &xi);
-                (0..m.internal.len())
-                    .map(|k| m.internal_reference[k] * Pose::exp(&link_twist(m, k, &w)))
-                    .collect()
-            })
-            .collect();
         (0..self.models[0].internal.len())
             .map(|k| {
-                let poses: Vec<Pose> = per_model.iter().map(|p| p[k]).collect();
-                blend_poses(&poses, &alpha)
+                // eq. 28 on the link's reference poses, then eq. 22 with T̄_l, then eq. 6.
+                let refs: Vec<Pose> = models.iter().map(|m| m.internal_reference[k]).collect();
+                let twist = models
+                    .iter()
+                    .zip(&alpha)
+                    .fold(Twist::ZERO, |acc, (m, a)| acc + link_twist(m, k, &w) * *a);
+                blend_poses(&refs, &alpha) * Pose::exp(&twist)
             })
             .collect()
     }

@@ -50,7 +50,7 @@ fn loads_of(m: &Mechanism, case: &LoadCase) -> Vec<Load> {
 pub fn blended_error(m: &Mechanism, set: &BlendedModel, case: &LoadCase) -> Result<f64, Error> {
     let start: Vec<_> = set.models[0].reference.clone();
     let (ee, alpha) = blended_statics(set, case, &start)?;
-    let internal = set.internal_poses(&ee, &alpha);
+    let internal = set.try_internal_poses(&ee, &alpha)?;
     Ok(constraint_error(
         m,
         &assemble(m, &set.models[0], &ee, &internal),
