@@ -28,6 +28,8 @@
 //!   every body is ballistic under gravity, its loads and its held contact load — the motion
 //!   model the event loop's time-of-impact bounds already cover. Velocities stay continuous;
 //!   a sliding body's motion under constant friction is exact, and a ball rolls without hops.
+//!   Full steps end on the grid of multiples of `h` in absolute time, so islands step at
+//!   the same instants and share the event loop's steps (each of which advances every body).
 //! - **Position stabilisation**: a held contact rests at the gap g_r = `rest_gap_fraction`·ε_c
 //!   inside the contact envelope [0, ε_c]; each step asks for the end-of-step normal speed
 //!   u_n ≥ β·(g_r − gap)/h (β = [`SustainedSettings::stabilisation`]) for a gap below g_r,
