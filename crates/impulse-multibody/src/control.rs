@@ -42,6 +42,42 @@ pub trait Controller {
     fn update(&mut self, input: &ControlInput<'_>, output: &mut [f64]);
     /// `self` as `Any`, for [`Simulation::controller_mut`]: implement as `self`.
     fn as_any_mut(&mut self) -> &mut dyn Any;
+    /// Checks the controller against the model of the simulation it is added to (joint
+    /// indices in range, finite gains), so that a mistake is an error naming the joint when it
+    /// is added, not a panic or a non-finite state later. The default accepts everything.
+    ///
+    /// # Errors
+    /// A [`MultibodyError`] saying what does not fit.
+    fn check(&self, model: &Model) -> Result<(), MultibodyError> {
+        let _ = model;
+        Ok(())
+    }
+}
+
+/// An error unless joint index `joint` exists in `model`.
+fn check_joint(model: &Model, joint: usize) -> Result<&str, MultibodyError> {
+    model
+        .joint_names()
+        .get(joint)
+        .map(String::as_str)
+        .ok_or_else(|| MultibodyError::UnknownName {
+            kind: "joint",
+            name: format!(
+                "index {joint} (the model has {} joints)",
+                model.joint_count()
+            ),
+        })
+}
+
+/// An error naming `joint` unless every named value is finite.
+fn check_finite(joint: &str, values: &[(&str, f64)]) -> Result<(), MultibodyError> {
+    match values.iter().find(|(_, v)| !v.is_finite()) {
+        None => Ok(()),
+        Some((name, v)) => Err(MultibodyError::InvalidJoint {
+            joint: joint.to_owned(),
+            reason: format!("controller {name} = {v} is not finite"),
+        }),
+    }
 }
 
 /// Positional/velocity PD control of one joint (thesis §5.4.1, Fig. 5.13):
@@ -98,6 +134,18 @@ impl Controller for JointPd {
     fn as_any_mut(&mut self) -> &mut dyn Any {
         self
     }
+    fn check(&self, model: &Model) -> Result<(), MultibodyError> {
+        let name = check_joint(model, self.joint)?;
+        check_finite(
+            name,
+            &[
+                ("k_p", self.kp),
+                ("k_v", self.kv),
+                ("q_des", self.q_des),
+                ("qd_des", self.qd_des),
+            ],
+        )
+    }
 }
 
 /// PID control of one joint, thesis eq. (5.15):
@@ -139,6 +187,11 @@ impl Controller for JointPid {
     }
     fn as_any_mut(&mut self) -> &mut dyn Any {
         self
+    }
+    fn check(&self, model: &Model) -> Result<(), MultibodyError> {
+        self.pd.check(model)?;
+        let name = check_joint(model, self.pd.joint)?;
+        check_finite(name, &[("k_i", self.ki), ("integral", self.integral)])
     }
 }
 
@@ -231,6 +284,37 @@ impl Controller for ComputedTorque {
     }
     fn as_any_mut(&mut self) -> &mut dyn Any {
         self
+    }
+    fn check(&self, model: &Model) -> Result<(), MultibodyError> {
+        if model.is_floating() || model.joint_count() != self.qdd.len() {
+            return Err(MultibodyError::InvalidArgument {
+                what: "computed torque",
+                reason: format!(
+                    "made for a fixed-base model of {} joints, added to a {} model of {}",
+                    self.qdd.len(),
+                    if model.is_floating() {
+                        "floating-base"
+                    } else {
+                        "fixed-base"
+                    },
+                    model.joint_count()
+                ),
+            });
+        }
+        for (j, name) in model.joint_names().iter().enumerate() {
+            let at = |v: &[f64]| v.get(j).copied().unwrap_or(f64::NAN);
+            check_finite(
+                name,
+                &[
+                    ("k_p", self.kp),
+                    ("k_v", self.kv),
+                    ("q_ref", at(&self.q_ref)),
+                    ("qd_ref", at(&self.qd_ref)),
+                    ("qdd_ref", at(&self.qdd_ref)),
+                ],
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -451,13 +535,16 @@ impl Simulation {
     /// Adds a controller; its first update is now and then every `period` seconds.
     ///
     /// # Errors
-    /// [`MultibodyError::InvalidArgument`] if its period is not finite and positive.
+    /// [`MultibodyError::InvalidArgument`] if its period is not finite and positive; whatever
+    /// [`Controller::check`] finds wrong against this simulation's model (a joint index out of
+    /// range, a non-finite gain or target, naming the joint).
     pub fn add_controller(
         &mut self,
         ctrl: Box<dyn Controller>,
     ) -> Result<ControllerId, MultibodyError> {
         let period = ctrl.period();
         check_period(period)?;
+        ctrl.check(&self.model)?;
         self.slots.push(Slot {
             ctrl,
             start: self.t,

@@ -323,6 +323,52 @@ fn bad_arguments_are_errors() {
     assert!(sim.run_until(f64::NAN).is_err());
 }
 
+/// A controller that does not fit the simulation's model is refused when it is added, naming
+/// the joint, instead of indexing out of range (a panic) or feeding NaN to the integrator.
+#[test]
+fn controllers_that_do_not_fit_the_model_are_refused_naming_the_joint() {
+    let mut sim = Simulation::new(slider(1.0), vec![0.0], vec![0.0], tight()).unwrap();
+    let err = sim
+        .add_controller(Box::new(JointPd::new(3, 1.0, 1.0, 1e-3)))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("index 3") && err.contains("1 joints"), "{err}");
+    let err = sim
+        .add_controller(Box::new(JointPd::new(0, f64::NAN, 1.0, 1e-3)))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("slide") && err.contains("k_p"), "{err}");
+    let mut pid = JointPid::new(0, 1.0, 1.0, 1.0, 1e-3);
+    pid.pd.q_des = f64::INFINITY;
+    let err = sim.add_controller(Box::new(pid)).unwrap_err().to_string();
+    assert!(err.contains("slide") && err.contains("q_des"), "{err}");
+    // Computed torque made for a model of two joints, added to one of one.
+    let mut b = ModelBuilder::new(BaseKind::Fixed);
+    b.link("ground", SpatialInertia::ZERO)
+        .link("a", SpatialInertia::new(1.0, DVec3::X, DMat3::IDENTITY))
+        .link("b", SpatialInertia::new(1.0, DVec3::X, DMat3::IDENTITY))
+        .joint(JointSpec::revolute(
+            "ja",
+            "ground",
+            "a",
+            Pose::IDENTITY,
+            DVec3::Z,
+        ))
+        .joint(JointSpec::revolute(
+            "jb",
+            "a",
+            "b",
+            Pose::IDENTITY,
+            DVec3::Z,
+        ));
+    let two = b.build().unwrap();
+    let ct = ComputedTorque::new(&two, 10.0, 5.0, 1e-3).unwrap();
+    let err = sim.add_controller(Box::new(ct)).unwrap_err().to_string();
+    assert!(err.contains("2 joints") && err.contains("of 1"), "{err}");
+    // Nothing was added: the simulation still runs.
+    sim.run_until(0.01).unwrap();
+}
+
 /// A PD velocity loop (k_p = 0) on a wheel of inertia I about its axle, updated every h with
 /// zero-order hold, reaches its commanded speed along the closed form of the held torques:
 /// over each period the torque k_v·(ω_des − ω_k) is constant, so ω_{k+1} = ω_k + (h·k_v/I)·
