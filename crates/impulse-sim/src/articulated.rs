@@ -66,10 +66,20 @@ impl LinkCollision {
     }
 }
 
-/// What one side contributes: its contact-point velocity (world) and its K (world axes).
+/// What one side contributes: its contact-point velocity (world), its K (collision-frame
+/// axes), and what applies the impulse to it (prepared once, used once).
 struct Side {
     velocity: DVec3,
     k: DMat3,
+    response: SideResponse,
+}
+
+/// How a side takes the impulse: the articulated inertias of its configuration, or its mass
+/// properties.
+enum SideResponse {
+    Link(Box<ImpulseDynamics>),
+    Rigid(Body),
+    Fixed,
 }
 
 fn bad(what: &str, e: impl std::fmt::Display) -> SimError {
@@ -84,15 +94,13 @@ impl Collider<'_> {
                 ws.update_kinematics(model, q, v)
                     .map_err(|e| bad("kinematics", e))?;
                 let mut imp = ImpulseDynamics::new(model, q).map_err(|e| bad("K", e))?;
-                // K in collision-frame axes, back to world axes (Q·K·Qᵀ) to sum with the other
-                // side's.
-                let kc = imp
+                let k = imp
                     .collision_matrix_world(model, *link, x, frame.axes())
                     .map_err(|e| bad("K", e))?;
-                let qm = frame.axes();
                 Ok(Side {
                     velocity: ws.point_velocity(model, *link, x),
-                    k: qm * kc * qm.transpose(),
+                    k,
+                    response: SideResponse::Link(Box::new(imp)),
                 })
             }
             Collider::Rigid {
@@ -106,21 +114,22 @@ impl Collider<'_> {
                 let r = x - *com;
                 Ok(Side {
                     velocity: **velocity + omega.cross(r),
-                    k: body.point_compliance(r),
+                    k: frame.matrix_to_contact(body.point_compliance(r)),
+                    response: SideResponse::Rigid(body),
                 })
             }
             Collider::Fixed => Ok(Side {
                 velocity: DVec3::ZERO,
                 k: DMat3::ZERO,
+                response: SideResponse::Fixed,
             }),
         }
     }
 
-    /// Applies impulse `p` (world) at `x`.
-    fn apply(&mut self, x: DVec3, p: DVec3) -> Result<(), SimError> {
-        match self {
-            Collider::Link { model, q, v, link } => {
-                let mut imp = ImpulseDynamics::new(model, q).map_err(|e| bad("propagation", e))?;
+    /// Applies impulse `p` (world) at `x` through the side prepared by [`Self::side`].
+    fn apply(&mut self, side: Side, x: DVec3, p: DVec3) -> Result<(), SimError> {
+        match (self, side.response) {
+            (Collider::Link { model, v, link, .. }, SideResponse::Link(mut imp)) => {
                 let mut dv = vec![0.0; model.nv()];
                 imp.propagate_impulse(model, *link, x, p, &mut dv)
                     .map_err(|e| bad("propagation", e))?;
@@ -128,19 +137,20 @@ impl Collider<'_> {
                     *vi += d;
                 }
             }
-            Collider::Rigid {
-                mass,
-                inertia,
-                com,
-                velocity,
-                omega,
-            } => {
-                let body = Body::moving(*mass, *inertia).map_err(|e| bad("rigid body", e))?;
+            (
+                Collider::Rigid {
+                    com,
+                    velocity,
+                    omega,
+                    ..
+                },
+                SideResponse::Rigid(body),
+            ) => {
                 let (dv, dw) = body.velocity_change(x - *com, p);
                 **velocity += dv;
                 **omega += dw;
             }
-            Collider::Fixed => {}
+            _ => {}
         }
         Ok(())
     }
@@ -165,15 +175,14 @@ pub fn collide(
 ) -> Result<LinkCollision, SimError> {
     let frame = ContactFrame::from_normal(normal).map_err(|err| bad("normal", err))?;
     let (sa, sb) = (a.side(x, &frame)?, b.side(x, &frame)?);
-    let k_contact = frame.axes().transpose() * (sa.k + sb.k) * frame.axes();
-    let k = CollisionMatrix::new(k_contact).map_err(|err| bad("collision matrix", err))?;
+    let k = CollisionMatrix::new(sa.k + sb.k).map_err(|err| bad("collision matrix", err))?;
     let u0 = frame.to_contact(sa.velocity - sb.velocity);
     let response =
         impulse_response::resolve(&k, u0, mu, e, Restitution::Stronge, &Settings::default())
             .map_err(|err| bad("response", err))?;
     let p = response.impulse_world(&frame);
-    a.apply(x, p)?;
-    b.apply(x, -p)?;
+    a.apply(sa, x, p)?;
+    b.apply(sb, x, -p)?;
     Ok(LinkCollision { response, frame })
 }
 
