@@ -15,6 +15,7 @@ use crate::error::MultibodyError;
 use crate::integrate::{Accel, Integrator, IntegratorStats, Stepper};
 use crate::limit::{DEFAULT_LIMIT_REST_SPEED, InverseMass, LimitStats, Stop};
 use crate::model::{Model, check_len};
+use crate::travel::{LinkKinematics, LinkTravel};
 
 /// What a controller sees at an update: the time, the model and the sampled state.
 #[derive(Debug)]
@@ -35,7 +36,11 @@ pub struct ControlInput<'a> {
 /// next update; the outputs of all enabled controllers are summed with the applied forces.
 /// High-level controllers (the thesis's callbacks, e.g. finite-state machines) implement this
 /// trait too and may write nothing.
-pub trait Controller {
+///
+/// A controller must be `Clone` and `Send` (a world holding the simulation is copied to undo a
+/// failed step, and stepped on any thread): derive `Clone` and the blanket [`ControllerClone`]
+/// does the rest.
+pub trait Controller: ControllerClone + Send {
     /// Update period (s), > 0 and finite.
     fn period(&self) -> f64;
     /// Samples the state and writes the output to hold (nv).
@@ -51,6 +56,25 @@ pub trait Controller {
     fn check(&self, model: &Model) -> Result<(), MultibodyError> {
         let _ = model;
         Ok(())
+    }
+}
+
+/// Copies a boxed [`Controller`]; implemented for every `Controller + Clone` type, so a
+/// controller only derives `Clone`.
+pub trait ControllerClone {
+    /// A boxed copy of `self`.
+    fn clone_box(&self) -> Box<dyn Controller>;
+}
+
+impl<T: Controller + Clone + 'static> ControllerClone for T {
+    fn clone_box(&self) -> Box<dyn Controller> {
+        Box::new(self.clone())
+    }
+}
+
+impl Clone for Box<dyn Controller> {
+    fn clone(&self) -> Self {
+        self.clone_box()
     }
 }
 
@@ -333,6 +357,7 @@ fn check_period(period: f64) -> Result<(), MultibodyError> {
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
 pub struct ControllerId(usize);
 
+#[derive(Clone)]
 struct Slot {
     ctrl: Box<dyn Controller>,
     start: f64,
@@ -359,6 +384,9 @@ pub(crate) struct Rhs<'a> {
     pub(crate) tau: &'a mut [f64],
     /// Joints resting on a stop: held at zero acceleration by a constraint force.
     pub(crate) resting: &'a [Stop],
+    /// Where every derivative evaluation records the links' states, when tracking is on
+    /// ([`Simulation::set_tracking`]).
+    pub(crate) track: Option<&'a mut [LinkTravel]>,
 }
 
 impl Accel for Rhs<'_> {
@@ -373,6 +401,9 @@ impl Accel for Rhs<'_> {
         // Passive elements inside every derivative evaluation (§5.4.1).
         self.model.add_passive_forces(q, v, self.tau)?;
         forward_dynamics(self.model, self.ws, q, v, self.tau, None, vdot)?;
+        if let Some(track) = self.track.as_deref_mut() {
+            crate::travel::record(self.model, self.ws, track);
+        }
         if !self.resting.is_empty() {
             let joints: Vec<usize> = self.resting.iter().map(|s| s.joint).collect();
             InverseMass::new(self.model, self.ws, q)?.constrain(
@@ -387,6 +418,7 @@ impl Accel for Rhs<'_> {
 
 /// A multibody moving under gravity, passive joint elements, applied forces and scheduled
 /// controllers, advanced by an [`Integrator`].
+#[derive(Clone)]
 pub struct Simulation {
     pub(crate) model: Model,
     pub(crate) q: Vec<f64>,
@@ -406,6 +438,8 @@ pub struct Simulation {
     pub(crate) limit_stats: LimitStats,
     /// The instant of the last stop and how many stops were resolved at it.
     pub(crate) instant: (f64, usize),
+    /// Per link, the range of states seen since tracking was last reset (`None`: off).
+    pub(crate) travel: Option<Vec<LinkTravel>>,
 }
 
 impl std::fmt::Debug for Simulation {
@@ -458,6 +492,7 @@ impl Simulation {
             rest_speed: DEFAULT_LIMIT_REST_SPEED,
             limit_stats: LimitStats::default(),
             instant: (f64::NEG_INFINITY, 0),
+            travel: None,
             model,
         })
         .and_then(|sim| {
@@ -617,6 +652,46 @@ impl Simulation {
         Ok(&self.ws)
     }
 
+    /// Turns on (or off) the recording of every link's range of states at every derivative
+    /// evaluation ([`Simulation::take_travel`]): what a hybrid event loop checks its
+    /// predictions against (thesis §5.2, Figs. 5.3 and 5.4). Off by default.
+    pub fn set_tracking(&mut self, on: bool) {
+        self.travel = on.then(|| vec![LinkTravel::EMPTY; self.model.link_count()]);
+    }
+
+    /// The range of states of every link (in link order) seen since the last call, and
+    /// empty ranges from now on; `None` when tracking is off.
+    pub fn take_travel(&mut self) -> Option<Vec<LinkTravel>> {
+        let n = self.model.link_count();
+        self.travel
+            .as_mut()
+            .map(|t| std::mem::replace(t, vec![LinkTravel::EMPTY; n]))
+    }
+
+    /// Every link's kinematics now (in link order): pose, velocity, angular velocity and the
+    /// acceleration of its frame origin under the forces held now (gravity, passive
+    /// elements, applied forces and controller outputs; a joint resting on a stop is not
+    /// held here). What a hybrid event loop predicts the links' next motion from.
+    ///
+    /// # Errors
+    /// [`MultibodyError::SingularInertia`] for a non-finite state.
+    pub fn link_kinematics(&mut self) -> Result<Vec<LinkKinematics>, MultibodyError> {
+        let mut vdot = vec![0.0; self.model.nv()];
+        self.tau.copy_from_slice(&self.held);
+        self.model
+            .add_passive_forces(&self.q, &self.v, &mut self.tau)?;
+        forward_dynamics(
+            &self.model,
+            &mut self.ws,
+            &self.q,
+            &self.v,
+            &self.tau,
+            None,
+            &mut vdot,
+        )?;
+        Ok(crate::travel::kinematics(&self.model, &mut self.ws))
+    }
+
     /// Runs the controllers due at the current time and sums the held outputs.
     fn fire_due(&mut self) {
         let input = ControlInput {
@@ -677,6 +752,7 @@ impl Simulation {
                 held: &self.held,
                 tau: &mut self.tau,
                 resting: &[],
+                track: self.travel.as_deref_mut(),
             };
             self.stepper.advance(
                 &self.integrator,

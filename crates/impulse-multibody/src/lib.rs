@@ -89,6 +89,7 @@ mod integrate;
 pub mod limit;
 mod model;
 mod spatial;
+mod travel;
 pub mod urdf;
 
 #[cfg(test)]
@@ -96,7 +97,8 @@ mod testutil;
 
 pub use collision::{ImpulseDynamics, PseudoInverse, pseudo_inverse};
 pub use control::{
-    ComputedTorque, ControlInput, Controller, ControllerId, JointPd, JointPid, Simulation,
+    ComputedTorque, ControlInput, Controller, ControllerClone, ControllerId, JointPd, JointPid,
+    Simulation,
 };
 pub use dynamics::{Workspace, bias_forces, forward_dynamics, inverse_dynamics, mass_matrix};
 pub use error::MultibodyError;
@@ -106,6 +108,7 @@ pub use faer::Mat;
 pub use integrate::{AdaptiveRk4, Integrator, IntegratorStats};
 pub use limit::{JointLimit, LimitStats};
 pub use model::{BaseKind, JointPassive, JointSpec, JointType, LinkId, Model, ModelBuilder};
+pub use travel::{LinkKinematics, LinkTravel};
 
 /// Numerical tolerances of this crate, each with its reason.
 pub mod tol {

@@ -310,6 +310,7 @@ impl crate::Simulation {
             held: &self.held,
             tau: &mut self.tau,
             resting: &self.resting,
+            track: self.travel.as_deref_mut(),
         };
         self.stepper.advance(
             &self.integrator,
@@ -403,6 +404,7 @@ impl crate::Simulation {
             held: &self.held,
             tau: &mut self.tau,
             resting: &[],
+            track: None,
         };
         crate::integrate::Accel::accel(&mut rhs, self.t, &self.q, &self.v, &mut free)?;
         let minv = InverseMass::new(&self.model, &mut self.ws, &self.q)?;

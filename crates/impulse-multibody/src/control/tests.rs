@@ -93,6 +93,7 @@ fn pd_holds_an_arm_at_the_analytic_deflection() {
 }
 
 /// Records its update times and outputs a torque that depends on the update count.
+#[derive(Clone)]
 struct Recorder {
     period: f64,
     times: Vec<f64>,
