@@ -21,6 +21,7 @@
 //! | [`Cycler`] | COM on a circle at rate Ω, fixed orientation | (2.14) or (2.15), by D* |
 //! | [`Spinner`] | rotation about a fixed axis through a fixed COM | `(0, \|Ω\|·r_max·‖d̂⊥‖)` |
 //! | [`Oscillator`] | COM `p_c + a·sin(ωτ + φ)·axis`, fixed orientation | linear or quadratic |
+//! | [`LinkMotion`] | a multibody link: padded second-order prediction (§5.2) | padded, **not conservative**: the caller checks |
 //! | [`Motion::Unbounded`] | unknown: no bound exists | `(0, +∞)`: check now |
 //!
 //! Design: *Option A*, a trait with one type per motion and `Box<dyn Motion>` per body;
@@ -47,6 +48,7 @@ use impulse_geom::Aabb;
 
 mod ballistic;
 mod cycler;
+mod link;
 mod omega;
 mod oscillator;
 mod spinner;
@@ -55,6 +57,7 @@ pub(crate) mod testkit;
 
 pub use ballistic::Ballistic;
 pub use cycler::Cycler;
+pub use link::{LINK_SWEPT_PADDING, LINK_TOI_PADDING, LinkMotion, SeenSpeeds};
 pub use omega::{
     alpha_max_torque_free, omega_max_energy, omega_max_energy_world, omega_max_momentum,
     omega_max_momentum_world,
@@ -245,6 +248,8 @@ pub enum Motion {
     Spinner(Spinner),
     /// Scripted sinusoidal COM translation at fixed orientation.
     Oscillator(Oscillator),
+    /// A link of a multibody: a padded prediction the caller must check (thesis §5.2).
+    Link(LinkMotion),
     /// A body whose motion cannot be bounded (its angular speed bound overflows, or its state
     /// is not finite), with its last centre of mass (world, m; may be NaN). It is never
     /// claimed to stay still: its coefficients are [`UNBOUNDED_COEFFICIENTS`] (every pair with
@@ -313,6 +318,7 @@ impl Motion {
             Motion::Cycler(m) => m.toi_coefficients(d_hat, gap),
             Motion::Spinner(m) => m.toi_coefficients(d_hat, r_max),
             Motion::Oscillator(m) => m.toi_coefficients(d_hat, gap),
+            Motion::Link(m) => m.toi_coefficients(d_hat, r_max),
             Motion::Unbounded { .. } => UNBOUNDED_COEFFICIENTS,
         }
     }
@@ -328,6 +334,7 @@ impl Motion {
             Motion::Cycler(m) => m.swept_com_aabb(dt),
             Motion::Spinner(m) => m.swept_com_aabb(dt),
             Motion::Oscillator(m) => m.swept_com_aabb(dt),
+            Motion::Link(m) => m.swept_com_aabb(dt),
             Motion::Unbounded { .. } => ALL_SPACE,
         }
     }
@@ -342,6 +349,7 @@ impl Motion {
             Motion::Cycler(m) => m.com_at(dt),
             Motion::Spinner(m) => m.com(),
             Motion::Oscillator(m) => m.com_at(dt),
+            Motion::Link(m) => m.com_at(dt),
         }
     }
 
@@ -354,6 +362,7 @@ impl Motion {
             Motion::Ballistic(m) => m.com_velocity_at(dt),
             Motion::Cycler(m) => m.com_velocity_at(dt),
             Motion::Oscillator(m) => m.com_velocity_at(dt),
+            Motion::Link(m) => m.com_velocity_at(dt),
         }
     }
 
@@ -370,6 +379,7 @@ impl Motion {
             Motion::Ballistic(m) => Motion::Ballistic(m.advance(dt)?),
             Motion::Cycler(m) => Motion::Cycler(m.advance(dt)?),
             Motion::Oscillator(m) => Motion::Oscillator(m.advance(dt)?),
+            Motion::Link(m) => Motion::Link(m.advance(dt)?),
         })
     }
 }
