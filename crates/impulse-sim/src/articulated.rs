@@ -13,7 +13,9 @@
 
 use glam::{DMat3, DVec3};
 use impulse_multibody::{ImpulseDynamics, LinkId, Model, Workspace};
-use impulse_response::{Body, CollisionMatrix, ContactFrame, Response, Restitution, Settings};
+use impulse_response::{
+    Body, CollisionMatrix, ContactFrame, MicrocollisionParams, Response, Restitution, Settings,
+};
 
 use crate::error::SimError;
 
@@ -46,6 +48,27 @@ pub enum Collider<'a> {
     },
     /// An immovable body (the ground, a wall).
     Fixed,
+    /// A body of infinite mass moving on its own (a scripted body), with the velocity of its
+    /// point at the contact.
+    Kinematic {
+        /// Velocity of the body's point at the contact (world).
+        velocity: DVec3,
+    },
+}
+
+/// The collision law of [`collide_with`]: friction, restitution and, for resting contact, the
+/// microcollision model (thesis §3.5) the world uses for rigid bodies.
+#[derive(Clone, Copy, Debug)]
+pub struct Law {
+    /// Coulomb friction coefficient μ.
+    pub friction: f64,
+    /// Stronge's restitution e.
+    pub restitution: f64,
+    /// The microcollision model with the pair's current separation (`None`: every contact is
+    /// an ordinary collision).
+    pub micro: Option<(MicrocollisionParams, f64)>,
+    /// The collision integrator's settings.
+    pub settings: Settings,
 }
 
 /// A resolved collision: the chapter-3 response (impulse on side `a`, collision frame) and its
@@ -123,6 +146,11 @@ impl Collider<'_> {
                 k: DMat3::ZERO,
                 response: SideResponse::Fixed,
             }),
+            Collider::Kinematic { velocity } => Ok(Side {
+                velocity: *velocity,
+                k: DMat3::ZERO,
+                response: SideResponse::Fixed,
+            }),
         }
     }
 
@@ -173,13 +201,46 @@ pub fn collide(
     mu: f64,
     e: f64,
 ) -> Result<LinkCollision, SimError> {
+    let law = Law {
+        friction: mu,
+        restitution: e,
+        micro: None,
+        settings: Settings::default(),
+    };
+    collide_with(a, b, x, normal, &law)
+}
+
+/// [`collide`] under a full [`Law`]: with a microcollision model, a slow approach is a
+/// microcollision (the reversing impulse or boosted restitution, thesis §3.5, the same
+/// `impulse_response` code as rigid bodies use).
+///
+/// # Errors
+/// As [`collide`].
+pub fn collide_with(
+    a: &mut Collider<'_>,
+    b: &mut Collider<'_>,
+    x: DVec3,
+    normal: DVec3,
+    law: &Law,
+) -> Result<LinkCollision, SimError> {
     let frame = ContactFrame::from_normal(normal).map_err(|err| bad("normal", err))?;
     let (sa, sb) = (a.side(x, &frame)?, b.side(x, &frame)?);
     let k = CollisionMatrix::new(sa.k + sb.k).map_err(|err| bad("collision matrix", err))?;
     let u0 = frame.to_contact(sa.velocity - sb.velocity);
-    let response =
-        impulse_response::resolve(&k, u0, mu, e, Restitution::Stronge, &Settings::default())
-            .map_err(|err| bad("response", err))?;
+    let (mu, e) = (law.friction, law.restitution);
+    let response = match &law.micro {
+        Some((params, separation)) => impulse_response::resolve_with_microcollisions(
+            &k,
+            u0,
+            mu,
+            e,
+            separation.max(0.0),
+            params,
+            &law.settings,
+        ),
+        None => impulse_response::resolve(&k, u0, mu, e, Restitution::Stronge, &law.settings),
+    }
+    .map_err(|err| bad("response", err))?;
     let p = response.impulse_world(&frame);
     a.apply(sa, x, p)?;
     b.apply(sb, x, -p)?;

@@ -61,6 +61,11 @@ pub enum BodyKind {
     Dynamic,
     /// Moves on a prescribed path (thesis §2.5) whatever hits it: infinite mass.
     Scripted,
+    /// A link of a multibody in the world (thesis ch. 5): its multibody's dynamics move it
+    /// and take its collisions. Its pose is the link frame (where its shapes are given, not
+    /// its centre of mass), its velocity that of the frame's origin, and it has no mass of its
+    /// own here (energies and momenta are the multibody's: [`crate::World::multibody`]).
+    Link,
 }
 
 /// The mass of a dynamic body, in its principal frame.
@@ -127,6 +132,8 @@ pub struct Body {
     pub(crate) held_torque: DVec3,
     /// Asleep: at rest in a sleeping island, it does not move until woken.
     pub(crate) asleep: bool,
+    /// For a link: its multibody (index in the world) and link.
+    pub(crate) link: Option<(u32, impulse_multibody::LinkId)>,
 }
 
 impl Body {
@@ -166,6 +173,7 @@ impl Body {
             held_force: DVec3::ZERO,
             held_torque: DVec3::ZERO,
             asleep: false,
+            link: None,
         }
     }
 
@@ -228,6 +236,18 @@ impl Body {
     #[must_use]
     pub fn is_dynamic(&self) -> bool {
         self.kind == BodyKind::Dynamic
+    }
+
+    /// True for a link of a multibody.
+    #[must_use]
+    pub fn is_link(&self) -> bool {
+        self.kind == BodyKind::Link
+    }
+
+    /// True for a body that collisions move: dynamic bodies and multibody links.
+    #[must_use]
+    pub fn takes_impulses(&self) -> bool {
+        self.is_dynamic() || self.is_link()
     }
 
     /// Inverse mass (0 for fixed and scripted bodies).
@@ -329,7 +349,7 @@ impl Body {
         let com = self.pose.translation;
         match self.kind {
             BodyKind::Fixed => Motion::Fixed { com },
-            BodyKind::Scripted => self.script.unwrap_or(Motion::Fixed { com }),
+            BodyKind::Scripted | BodyKind::Link => self.script.unwrap_or(Motion::Fixed { com }),
             BodyKind::Dynamic if self.asleep => Motion::Fixed { com },
             BodyKind::Dynamic => {
                 let Some(m) = self.mass else {
@@ -396,7 +416,8 @@ impl Body {
             return Ok(());
         }
         match self.kind {
-            BodyKind::Fixed => {}
+            // A link is moved by its multibody (the world's hybrid step).
+            BodyKind::Fixed | BodyKind::Link => {}
             BodyKind::Scripted => {
                 if let Some(script) = self.script {
                     let com = script.com_at(dt);

@@ -117,6 +117,12 @@ fn pieces(
     }
 }
 
+/// The collision shape a description gives, in its own frame (a multibody link's shape).
+pub(crate) fn shape(desc: &ShapeDesc, base_dir: &Path) -> Result<Shape, String> {
+    let (parts, _) = pieces(desc, base_dir)?;
+    Shape::compound(parts).map_err(|e| e.to_string())
+}
+
 /// Builds one body from its (validated) description.
 pub(crate) fn body(desc: &BodyDesc, material: usize, base_dir: &Path) -> Result<Body, SimError> {
     let geometry = |message: String| SimError::Geometry {

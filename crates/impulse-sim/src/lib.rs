@@ -65,8 +65,8 @@ pub use record::{Frame, Recording, run};
 pub use scene::{Scene, SceneDesc};
 pub use sustained::{ContactMode, SustainedSettings};
 pub use world::{
-    BodyHandle, BodyState, ContactEvent, ContactFailure, Counters, Load, LoadFn, Material,
-    StepReport, World, WorldSettings,
+    BodyHandle, BodyState, ContactEvent, ContactFailure, Counters, LinkShape, Load, LoadFn,
+    Material, MultibodyHandle, StepReport, World, WorldSettings,
 };
 
 #[cfg(test)]

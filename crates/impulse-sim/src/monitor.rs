@@ -63,8 +63,9 @@ impl PenetrationMonitor {
         &self.report
     }
 
-    /// Measures every close pair of the world now: pairs with at least one dynamic body whose
-    /// tight boxes, grown by ε_c, overlap.
+    /// Measures every close pair of the world now: pairs with at least one dynamic body or
+    /// multibody link (not two links of one multibody) whose tight boxes, grown by ε_c,
+    /// overlap.
     pub fn sample(&mut self, world: &World) {
         let bodies: Vec<_> = world.bodies().collect();
         let eps = world.collision_epsilon();
@@ -75,7 +76,8 @@ impl PenetrationMonitor {
         self.report.samples += 1;
         for (i, j) in close_pairs(&boxes) {
             let ((ha, a), (hb, b)) = (bodies[i as usize], bodies[j as usize]);
-            if !(a.is_dynamic() || b.is_dynamic()) {
+            let same_multibody = matches!((a.link, b.link), (Some((x, _)), Some((y, _))) if x == y);
+            if !(a.takes_impulses() || b.takes_impulses()) || same_multibody {
                 continue;
             }
             self.report.pairs_measured += 1;

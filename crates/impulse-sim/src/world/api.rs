@@ -166,7 +166,7 @@ impl World {
 
     /// Refuses new bodies that overlap one another or a body of the world by more than ε_c.
     /// Touching, or overlapping by less, is contact: the event loop takes it from there.
-    fn check_overlaps(&self, new: &[Body]) -> Result<(), SimError> {
+    pub(super) fn check_overlaps(&self, new: &[Body]) -> Result<(), SimError> {
         let eps = self.collision_epsilon();
         let old: Vec<&Body> = self.bodies().map(|(_, b)| b).collect();
         let all: Vec<&Body> = old.iter().copied().chain(new.iter()).collect();
@@ -176,8 +176,15 @@ impl World {
             .collect();
         for (i, j) in close_pairs(&boxes) {
             let (i, j) = (i as usize, j as usize);
-            if j < old.len() || !(all[i].is_dynamic() || all[j].is_dynamic()) {
-                continue; // two old bodies, or two that never collide (fixed walls may overlap)
+            let same_multibody =
+                matches!((all[i].link, all[j].link), (Some((a, _)), Some((b, _))) if a == b);
+            if j < old.len()
+                || !(all[i].takes_impulses() || all[j].takes_impulses())
+                || same_multibody
+            {
+                // Two old bodies, or two that never collide (fixed walls may overlap; links of
+                // one multibody touch at their joints).
+                continue;
             }
             refuse_overlap(all[i], all[j], eps)?;
         }
@@ -185,7 +192,7 @@ impl World {
     }
 
     /// Puts a built body in a free slot.
-    fn insert(&mut self, body: Body) -> u32 {
+    pub(super) fn insert(&mut self, body: Body) -> u32 {
         let name = body.name.clone();
         let i = if let Some(i) = self.free.pop() {
             self.slots[i as usize].body = Some(body);
@@ -214,7 +221,7 @@ impl World {
 
     /// Inserts bodies `new` in the broad phase, rebuilding its levels when a size falls
     /// outside the range they were made for.
-    fn sync_broadphase(&mut self, new: &[u32]) -> Result<(), SimError> {
+    pub(super) fn sync_broadphase(&mut self, new: &[u32]) -> Result<(), SimError> {
         let sizes: Vec<f64> = new.iter().map(|&i| self.broadphase_size(i)).collect();
         let fits = |(lo, hi): (f64, f64)| sizes.iter().all(|&s| s >= lo && s <= hi);
         match &self.hash {
@@ -267,6 +274,7 @@ impl World {
     /// [`SimError::UnknownBody`] for a handle whose body is already gone.
     pub fn remove_body(&mut self, h: BodyHandle) -> Result<Body, SimError> {
         let i = self.index_of(h)?;
+        self.refuse_link(i, "remove")?;
         for p in self.heap.pairs_of(i).collect::<Vec<_>>() {
             self.heap.remove(p);
         }
@@ -300,6 +308,7 @@ impl World {
         rotation: DQuat,
     ) -> Result<(), SimError> {
         let i = self.index_of(h)?;
+        self.refuse_link(i, "pose")?;
         let b = self.b(i);
         let bad = |field: &str, problem: String| SimError::Invalid {
             what: format!("body \"{}\"", b.name),
@@ -332,7 +341,7 @@ impl World {
         let eps = self.collision_epsilon();
         for j in others {
             let o = self.b(j);
-            if !(moved.is_dynamic() || o.is_dynamic())
+            if !(moved.takes_impulses() || o.takes_impulses())
                 || !moved
                     .shape
                     .aabb(&moved.pose)

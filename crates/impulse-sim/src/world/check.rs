@@ -217,7 +217,9 @@ impl World {
                 }
             }
         }
-        self.key_for(pair, &scan, false)
+        let key = self.key_for(pair, &scan, false);
+        self.note_slack(pair, scan.normal, scan.pieces, scan.motions, scan.distance);
+        key
     }
 
     /// The key of a pair: the earliest time any of its piece pairs could close the gap to the
@@ -319,11 +321,11 @@ impl World {
         }
         let key = if held {
             f64::INFINITY
-        } else if hit {
-            let scan = self.query(pair);
-            self.key_for(pair, &scan, true)
         } else {
-            self.key_for(pair, &scan, true)
+            let scan = if hit { self.query(pair) } else { scan };
+            let key = self.key_for(pair, &scan, true);
+            self.note_slack(pair, scan.normal, scan.pieces, scan.motions, scan.distance);
+            key
         };
         let still_close = self
             .hash
@@ -409,7 +411,8 @@ impl World {
             return false;
         }
         let (ba, bb) = (self.b(a), self.b(b));
-        if !(ba.is_dynamic() || bb.is_dynamic()) {
+        // Contacts of links are impulses (the multibody is not part of an island).
+        if !(ba.is_dynamic() || bb.is_dynamic()) || ba.is_link() || bb.is_link() {
             return false;
         }
         self.is_slow((a, b), x, n)
@@ -433,6 +436,7 @@ impl World {
         }
         let (ba, bb) = (self.b(a), self.b(b));
         (ba.is_dynamic() || bb.is_dynamic())
+            && !(ba.is_link() || bb.is_link())
             && super::island::rotation_speed(ba, bb)
                 < HOLD_ROTATION_FRACTION * self.rotation_limit()
     }
@@ -449,10 +453,15 @@ impl World {
     /// §2.4.3) — of the bodies whose motion the impulse changed: a fixed or scripted body's
     /// pairs stay valid.
     fn rekey_others(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
-        let moved: Vec<u32> = [pair.0, pair.1]
-            .into_iter()
-            .filter(|&b| self.b(b).is_dynamic())
-            .collect();
+        let mut moved = Vec::new();
+        for i in [pair.0, pair.1] {
+            match self.b(i).link {
+                // An impulse on a link moves its whole multibody.
+                Some((m, _)) => moved.extend(self.link_slots(m as usize)),
+                None if self.b(i).is_dynamic() => moved.push(i),
+                None => {}
+            }
+        }
         self.rekey(&moved, Some(pair))
     }
 
@@ -483,6 +492,9 @@ impl World {
     /// result is not finite, the fallback (a frictionless Newton impulse along the normal),
     /// reported. Returns whether an impulse was applied.
     fn resolve(&mut self, (i, j): (u32, u32), x: DVec3, n: DVec3, d: f64) -> bool {
+        if self.b(i).is_link() || self.b(j).is_link() {
+            return self.resolve_link((i, j), x, n, d);
+        }
         let (eps, gravity) = (self.collision_epsilon(), self.gravity);
         let g = gravity.length();
         let mat = self.material(i, j);

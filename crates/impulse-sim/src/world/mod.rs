@@ -42,6 +42,9 @@
 
 mod api;
 mod check;
+mod hybrid;
+mod hybrid_contact;
+mod hybrid_step;
 mod island;
 mod materials;
 mod patch;
@@ -57,6 +60,8 @@ use impulse_collide::{CollisionHeap, FeaturePair};
 use rustc_hash::FxHashMap;
 
 pub use api::{Load, LoadFn};
+pub use hybrid::{LinkShape, MultibodyHandle};
+pub use hybrid_step::{MAX_STEP_REDOS, SLACK_ROUNDING_REL};
 pub use materials::Material;
 
 use crate::body::{Body, Integrator};
@@ -164,6 +169,20 @@ pub struct Counters {
     pub unconverged_solves: u64,
     /// Direct solves on the sweeps' active set that were accepted.
     pub direct_solves: u64,
+    /// Steps of the multibodies undone and done again because a link's prediction failed
+    /// (thesis §5.2: a box or slack violation).
+    pub rollbacks: u64,
+    /// Links found outside the swept box they were predicted to stay in.
+    pub box_violations: u64,
+    /// Links found to have travelled toward another body farther than their pair's bound
+    /// allowed (the slack structure, thesis Fig. 5.4).
+    pub slack_violations: u64,
+    /// Steps taken although a prediction still failed after
+    /// [`hybrid_step::MAX_STEP_REDOS`] redos (a collision may have been missed).
+    pub unchecked_steps: u64,
+    /// Collisions and microcollisions involving a multibody link (also counted in
+    /// `collisions` or `microcollisions`).
+    pub link_contacts: u64,
 }
 
 /// One resolved contact ([`World::contacts`], [`World::set_event_log`]).
@@ -314,6 +333,8 @@ struct PairState {
     /// When the pair last took a collision impulse (the switching model holds a pair struck
     /// twice at one instant: `check_top`).
     last_hit: Option<f64>,
+    /// The slack structure of each side that is a multibody link (`hybrid_step.rs`).
+    slack: [Option<hybrid_step::Slack>; 2],
 }
 
 /// One slot of the body table.
@@ -406,6 +427,10 @@ pub struct World {
     moving: Vec<(u32, impulse_collide::Motion, f64)>,
     /// Contact islands of the switching model.
     islands: island::Islands,
+    /// The multibodies (thesis ch. 5), in the order they were added.
+    multibodies: Vec<hybrid::Member>,
+    /// The span the moving bodies' swept boxes were made for in the current step (s).
+    box_span: f64,
     #[cfg(test)]
     pub(crate) faults: Faults,
 }
@@ -495,6 +520,8 @@ impl World {
             checking: None,
             moving: Vec::new(),
             islands: island::Islands::new(settings.contact_mode, settings.sustained),
+            multibodies: Vec::new(),
+            box_span: 0.0,
             #[cfg(test)]
             faults: Faults::default(),
         })
@@ -699,18 +726,20 @@ impl World {
         self.bodies().map(|(_, b)| b.state()).collect()
     }
 
-    /// Total kinetic energy of the dynamic bodies.
+    /// Total kinetic energy of the dynamic bodies and the multibodies.
     #[must_use]
     pub fn kinetic_energy(&self) -> f64 {
-        self.bodies().map(|(_, b)| b.kinetic_energy()).sum()
+        self.bodies().map(|(_, b)| b.kinetic_energy()).sum::<f64>() + self.multibody_energies().0
     }
 
-    /// Total potential energy of the dynamic bodies in gravity (zero at the world origin).
+    /// Total potential energy of the dynamic bodies and the multibodies in gravity (zero at
+    /// the world origin).
     #[must_use]
     pub fn potential_energy(&self) -> f64 {
         self.bodies()
             .map(|(_, b)| b.potential_energy(self.gravity))
-            .sum()
+            .sum::<f64>()
+            + self.multibody_energies().1
     }
 
     fn handle_of(&self, i: u32) -> BodyHandle {
@@ -749,12 +778,20 @@ impl World {
 
     /// Whether the pair can ever need a collision (at least one body is dynamic).
     fn pair_matters(&self, a: u32, b: u32) -> bool {
-        self.b(a).is_dynamic() || self.b(b).is_dynamic()
+        let (ba, bb) = (self.b(a), self.b(b));
+        if let (Some((ma, _)), Some((mb, _))) = (ba.link, bb.link) {
+            // Links of one multibody do not collide (no self-collision).
+            return ma != mb;
+        }
+        ba.takes_impulses() || bb.takes_impulses()
     }
 }
 
 #[cfg(test)]
 mod island_tests;
+
+#[cfg(test)]
+mod hybrid_tests;
 
 #[cfg(test)]
 mod step_tests;

@@ -1,0 +1,234 @@
+//! Resolving a contact that involves a multibody link (thesis §5.3) inside the event loop:
+//! the sides as [`crate::articulated::Collider`]s, the same microcollision model as rigid
+//! bodies, the impulse propagated through each multibody, the link bodies moved to their new
+//! velocities.
+
+use glam::DVec3;
+use impulse_multibody::{Simulation, Workspace};
+use impulse_response::{MicrocollisionParams, ResponseKind, Settings};
+
+use super::{ContactEvent, ContactFailure, MAX_FAILURES_KEPT, World};
+use crate::articulated::{Collider, Law, collide_with};
+use crate::body::{Body, BodyKind};
+use crate::contact::{APPROACH_FLOOR_REL, ContactKind};
+
+/// Kinetic energy and linear momentum of a multibody.
+fn multibody_energy(sim: &Simulation) -> (f64, DVec3) {
+    let model = sim.model();
+    let mut ws = Workspace::new(model);
+    match ws.update_kinematics(model, sim.q(), sim.v()) {
+        Ok(()) => (ws.kinetic_energy(model), ws.momentum(model).f),
+        Err(_) => (f64::NAN, DVec3::NAN),
+    }
+}
+
+/// One side of a link contact, owned while the collision is resolved.
+enum Owned {
+    Link {
+        m: usize,
+        link: impulse_multibody::LinkId,
+        model: impulse_multibody::Model,
+        q: Vec<f64>,
+        v: Vec<f64>,
+    },
+    Rigid {
+        mass: f64,
+        inertia: glam::DMat3,
+        com: DVec3,
+        velocity: DVec3,
+        omega: DVec3,
+    },
+    Kinematic(DVec3),
+    Fixed,
+}
+
+impl Owned {
+    fn collider(&mut self) -> Collider<'_> {
+        match self {
+            Owned::Link {
+                link, model, q, v, ..
+            } => Collider::Link {
+                model,
+                q,
+                v,
+                link: *link,
+            },
+            Owned::Rigid {
+                mass,
+                inertia,
+                com,
+                velocity,
+                omega,
+            } => Collider::Rigid {
+                mass: *mass,
+                inertia: *inertia,
+                com: *com,
+                velocity,
+                omega,
+            },
+            Owned::Kinematic(v) => Collider::Kinematic { velocity: *v },
+            Owned::Fixed => Collider::Fixed,
+        }
+    }
+}
+
+impl World {
+    fn owned_side(&self, i: u32, x: DVec3) -> Owned {
+        let b: &Body = self.b(i);
+        if let Some((m, link)) = b.link {
+            let sim = &self.multibodies[m as usize].sim;
+            return Owned::Link {
+                m: m as usize,
+                link,
+                model: sim.model().clone(),
+                q: sim.q().to_vec(),
+                v: sim.v().to_vec(),
+            };
+        }
+        match (b.kind, b.mass) {
+            (BodyKind::Dynamic, Some(mass)) => Owned::Rigid {
+                mass: mass.mass,
+                inertia: b.inertia_world(),
+                com: b.pose.translation,
+                velocity: b.velocity,
+                omega: b.omega,
+            },
+            (BodyKind::Scripted, _) => Owned::Kinematic(b.point_velocity(x)),
+            _ => Owned::Fixed,
+        }
+    }
+
+    /// Kinetic energy and linear momentum of what body `i` belongs to (its multibody for a
+    /// link).
+    fn side_energy(&self, i: u32) -> (f64, DVec3) {
+        let b = self.b(i);
+        match b.link {
+            Some((m, _)) => multibody_energy(&self.multibodies[m as usize].sim),
+            None => (b.kinetic_energy(), b.linear_momentum()),
+        }
+    }
+
+    /// Resolves a contact of pair `(i, j)`, at least one a link, at `x` with normal `n` (from
+    /// j toward i) and separation `d`; returns whether an impulse was applied. A response that
+    /// fails is reported as a contact failure and applies nothing (the pair is checked again).
+    pub(super) fn resolve_link(&mut self, (i, j): (u32, u32), x: DVec3, n: DVec3, d: f64) -> bool {
+        let (eps, gravity) = (self.collision_epsilon(), self.gravity);
+        let g = gravity.length();
+        let u = self.b(i).point_velocity(x) - self.b(j).point_velocity(x);
+        if u.dot(n) >= -APPROACH_FLOOR_REL * (2.0 * g * eps).sqrt() {
+            return false;
+        }
+        let mat = self.material(i, j);
+        let law = Law {
+            friction: mat.friction,
+            restitution: mat.restitution,
+            micro: (g > 0.0).then(|| {
+                (
+                    MicrocollisionParams {
+                        gravity: g,
+                        normal_gravity: gravity.dot(n).abs(),
+                        collision_epsilon: eps,
+                        max_restitution: self.model.max_restitution,
+                        reversing: self.model.reversing,
+                    },
+                    d,
+                )
+            }),
+            settings: Settings {
+                rtol: self.model.collision_tolerance,
+                ..Settings::default()
+            },
+        };
+        let before = {
+            let (ea, pa) = self.side_energy(i);
+            let (eb, pb) = self.side_energy(j);
+            (ea + eb, pa + pb)
+        };
+        let (mut a, mut b) = (self.owned_side(i, x), self.owned_side(j, x));
+        let result = collide_with(&mut a.collider(), &mut b.collider(), x, n, &law);
+        let collision = match result {
+            Ok(c) if c.impulse_world().is_finite() => c,
+            failed => {
+                let message = match failed {
+                    Err(e) => e.to_string(),
+                    Ok(_) => "the impulse is not finite".to_string(),
+                };
+                self.counters.unresolved += 1;
+                if self.failures.len() < MAX_FAILURES_KEPT {
+                    let (ha, hb) = (self.handle_of(i), self.handle_of(j));
+                    self.failures.push(ContactFailure {
+                        time: self.time,
+                        a: ha,
+                        b: hb,
+                        message: format!("{message}; no impulse applied"),
+                    });
+                }
+                return false;
+            }
+        };
+        for (side, body) in [(a, i), (b, j)] {
+            match side {
+                Owned::Link { m, q, v, .. } => {
+                    let name = self.multibodies[m].name.clone();
+                    if let Err(e) = self.multibodies[m].sim.set_state(&q, &v) {
+                        self.failures.push(ContactFailure {
+                            time: self.time,
+                            a: self.handle_of(i),
+                            b: self.handle_of(j),
+                            message: format!("multibody {name}: {e}"),
+                        });
+                    }
+                    // A state that cannot be evaluated fails the next step, naming the
+                    // multibody.
+                    let _ = self.sync_links(m);
+                }
+                Owned::Rigid {
+                    velocity, omega, ..
+                } => {
+                    let b = self.b_mut(body);
+                    b.velocity = velocity;
+                    b.omega = omega;
+                }
+                Owned::Kinematic(_) | Owned::Fixed => {}
+            }
+        }
+        let micro = g > 0.0 && -u.dot(n) < (2.0 * g * eps).sqrt();
+        let kind = match collision.response.kind {
+            ResponseKind::Reversing => ContactKind::Reversing,
+            _ if micro => ContactKind::Microcollision,
+            _ => ContactKind::Collision,
+        };
+        match kind {
+            ContactKind::Collision => self.counters.collisions += 1,
+            ContactKind::Reversing => {
+                self.counters.microcollisions += 1;
+                self.counters.reversing += 1;
+            }
+            _ => self.counters.microcollisions += 1,
+        }
+        self.counters.link_contacts += 1;
+        let after = {
+            let (ea, pa) = self.side_energy(i);
+            let (eb, pb) = self.side_energy(j);
+            (ea + eb, pa + pb)
+        };
+        let event = ContactEvent {
+            time: self.time,
+            a: self.handle_of(i),
+            b: self.handle_of(j),
+            kind,
+            impulse: collision.impulse_world(),
+            point: x,
+            normal: n,
+            energy_before: before.0,
+            energy_after: after.0,
+            momentum_before: before.1,
+            momentum_after: after.1,
+        };
+        if let Some(log) = &mut self.events {
+            log.push(event);
+        }
+        self.recent.push(event);
+        true
+    }
+}

@@ -1,0 +1,260 @@
+//! The multibodies' part of a step of the event loop (thesis §5.2, Figs. 5.3 and 5.4).
+//!
+//! A link's swept box and time-of-impact coefficients are predictions, not bounds
+//! ([`impulse_collide::motion::LinkMotion`]). So each step integrates every multibody on a
+//! copy first, recording the range of each link's states at every derivative evaluation, and
+//! checks the predictions against it:
+//!
+//! - **box**: the link's seen path must lie in the swept box the broad phase was given;
+//! - **slack**: for every heap pair of the link, its travel toward the other body since the
+//!   pair's bound was computed (δ, accumulated step by step from Fig. 5.4's worst-case speed
+//!   along the pair's direction) must not exceed what the pair's coefficients allowed,
+//!   `A (t − t_b)² + B (t − t_b)`.
+//!
+//! When every check passes, the copies become the multibodies. Otherwise the step is undone
+//! (the copies are dropped: the world has not moved), each failing link's prediction is
+//! widened by the motion now known (its seen speeds and path), its box is replaced, new close
+//! pairs are promoted and its pairs get new bounds from the widened prediction; the step is
+//! then done again to the heap's top, which can only have come earlier. A redone step whose
+//! end did not move sees the same motion, which the widened predictions cover. Every
+//! violation and redo is counted ([`super::Counters`]).
+
+use glam::DVec3;
+use impulse_collide::Motion;
+use impulse_collide::motion::SeenSpeeds;
+use impulse_geom::Aabb;
+use impulse_multibody::LinkTravel;
+
+use super::World;
+use crate::error::SimError;
+
+/// Redos of one step before its result is taken unchecked (and counted in
+/// [`super::Counters::unchecked_steps`]). Each redo widens a failing link's prediction to the
+/// motion seen, so a second redo is rare; the cap guards the loop. Default `16`.
+pub const MAX_STEP_REDOS: u32 = 16;
+
+/// Rounding allowance of a slack check, relative to the travel compared (dimensionless):
+/// the accumulated travel and the allowance are sums of a few products. Default `1e-9`.
+pub const SLACK_ROUNDING_REL: f64 = 1e-9;
+
+/// The slack structure of one side of a pair (thesis §5.2.2): the prediction a pair's bound
+/// was made from, and the travel seen since.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Slack {
+    /// Direction of this side's travel toward the other body (world, unit).
+    d: DVec3,
+    /// Reach of rotation on the piece (m).
+    reach: f64,
+    /// The coefficients the bound used for this side.
+    a: f64,
+    b: f64,
+    /// When the bound was made.
+    t_b: f64,
+    /// Worst-case travel along `d` since `t_b`.
+    delta: f64,
+    /// When `delta` was last brought up to date.
+    t_l: f64,
+}
+
+impl Slack {
+    /// The travel the bound allowed by time `t`.
+    fn allowance(&self, t: f64) -> f64 {
+        let s = t - self.t_b;
+        self.a * s * s + self.b * s
+    }
+
+    /// `delta` brought up to `t` at the worst-case speed `k` seen over `[t_l, t]`, and whether
+    /// it stays within the allowance (Fig. 5.4 updateSlack).
+    fn update(&self, k: f64, t: f64) -> (f64, bool) {
+        let dt = (t - self.t_l).max(0.0);
+        let delta = self.delta + k * dt;
+        let allow = self.allowance(t);
+        let tol = SLACK_ROUNDING_REL * (delta.abs() + allow.abs() + (k.abs() + self.b.abs()) * dt);
+        (delta, delta <= allow + tol)
+    }
+}
+
+/// Fig. 5.4's view of a recorded travel.
+fn seen(t: &LinkTravel) -> SeenSpeeds {
+    SeenSpeeds {
+        velocity_min: t.velocity_min,
+        velocity_max: t.velocity_max,
+        omega_abs_max: t.omega_abs_max,
+        path: Aabb {
+            min: t.origin_min,
+            max: t.origin_max,
+        },
+    }
+}
+
+impl World {
+    /// Records, for each link side of pair `(a, b)` just given a bound from its closest
+    /// piece pair (`pieces`, normal `n` from b toward a, the two `motions`), the prediction
+    /// the bound rests on; clears it when there is no normal (the pair is due now).
+    pub(super) fn note_slack(
+        &mut self,
+        (a, b): (u32, u32),
+        n: Option<DVec3>,
+        pieces: (usize, usize),
+        motions: (Motion, Motion),
+        gap: f64,
+    ) {
+        let (la, lb) = (self.b(a).is_link(), self.b(b).is_link());
+        if !(la || lb) {
+            return;
+        }
+        let time = self.time;
+        let side = |w: &World, i: u32, piece: usize, motion: &Motion, d: Option<DVec3>| {
+            let d = d?;
+            let reach = w.b(i).reach[piece];
+            let (ca, cb) = motion.toi_coefficients(d, reach, gap);
+            Some(Slack {
+                d,
+                reach,
+                a: ca,
+                b: cb,
+                t_b: time,
+                delta: 0.0,
+                t_l: time,
+            })
+        };
+        let sa = if la {
+            side(self, a, pieces.0, &motions.0, n.map(|n| -n))
+        } else {
+            None
+        };
+        let sb = if lb {
+            side(self, b, pieces.1, &motions.1, n)
+        } else {
+            None
+        };
+        if let Some(state) = self.pairs.get_mut(&(a, b)) {
+            state.slack = [sa, sb];
+        }
+    }
+
+    /// The multibodies' part of the step from `t0` to `t_end` (module documentation): may
+    /// bring `t_end` earlier. Leaves every multibody and its link bodies at `t_end`.
+    ///
+    /// # Errors
+    /// [`SimError::Runtime`] when a multibody cannot be integrated (naming it), or from the
+    /// broad phase and the heap.
+    pub(super) fn advance_multibodies(&mut self, t0: f64, t_end: &mut f64) -> Result<(), SimError> {
+        if self.multibodies.is_empty() {
+            return Ok(());
+        }
+        let g = self.gravity;
+        let mut redos = 0;
+        loop {
+            if *t_end <= t0 {
+                return Ok(());
+            }
+            // The trial: each multibody on a copy, with the states it passes through.
+            let mut trials = Vec::with_capacity(self.multibodies.len());
+            for m in &self.multibodies {
+                let mut sim = m.sim.clone();
+                let _ = sim.take_travel();
+                sim.run_until(m.local(*t_end))
+                    .map_err(|e| self.runtime(format!("multibody {}: {e}", m.name)))?;
+                let end = sim
+                    .link_kinematics()
+                    .map_err(|e| self.runtime(format!("multibody {}: {e}", m.name)))?;
+                let mut travel = sim.take_travel().unwrap_or_default();
+                for &(id, slot) in &m.links {
+                    let (k, b) = (&end[id.index()], self.b(slot));
+                    let t = &mut travel[id.index()];
+                    t.add(k.pose.translation, k.velocity, k.omega);
+                    t.add(b.pose.translation, b.velocity, b.omega);
+                }
+                trials.push((sim, travel));
+            }
+            // The checks.
+            let mut widen = Vec::new();
+            let (mut boxes, mut slacks) = (0, 0);
+            for (mi, (_, travel)) in trials.iter().enumerate() {
+                for &(id, slot) in &self.multibodies[mi].links {
+                    let t = &travel[id.index()];
+                    let predicted = self.b(slot).motion(g).swept_com_aabb(self.box_span);
+                    let boxed = predicted.contains_point(t.origin_min)
+                        && predicted.contains_point(t.origin_max);
+                    let slacked = self.heap.pairs_of(slot).all(|p| {
+                        self.slack_of(p, slot)
+                            .is_none_or(|s| s.update(t.speed_along(s.d, s.reach), *t_end).1)
+                    });
+                    boxes += u64::from(!boxed);
+                    slacks += u64::from(!slacked);
+                    if !(boxed && slacked) {
+                        widen.push((slot, seen(t)));
+                    }
+                }
+            }
+            if widen.is_empty() || redos >= MAX_STEP_REDOS {
+                if !widen.is_empty() {
+                    self.counters.unchecked_steps += 1;
+                }
+                return self.commit_multibodies(trials, *t_end);
+            }
+            redos += 1;
+            self.counters.rollbacks += 1;
+            self.counters.box_violations += boxes;
+            self.counters.slack_violations += slacks;
+            // Undo: the copies are dropped. Widen each failing link's prediction by what it
+            // did, and give its pairs (and any pair its true box makes close) new bounds.
+            let slots: Vec<u32> = widen.iter().map(|&(s, _)| s).collect();
+            for (slot, seen) in widen {
+                let name = self.name(slot).to_owned();
+                let b = self.b_mut(slot);
+                if let Some(Motion::Link(m)) = b.script {
+                    let m = m.with_seen(seen).map_err(|e| SimError::Runtime {
+                        time: t0,
+                        message: format!("link body {name}: {e}"),
+                    })?;
+                    b.script = Some(Motion::Link(m));
+                }
+                let bx = self.swept_box(slot, self.box_span);
+                self.hash_mut()
+                    .update(slot, bx)
+                    .map_err(|e| self.runtime(format!("broad phase, body {name}: {e}")))?;
+            }
+            self.promote_new_pairs()?;
+            self.rekey(&slots, None)?;
+            if let Some((_, k)) = self.heap.peek() {
+                *t_end = t_end.min(k).max(t0);
+            }
+        }
+    }
+
+    /// The slack of `slot`'s side of heap pair `p`.
+    fn slack_of(&self, p: (u32, u32), slot: u32) -> Option<Slack> {
+        let side = usize::from(p.0 != slot);
+        self.pairs.get(&p).and_then(|s| s.slack[side])
+    }
+
+    /// Makes the trial the multibodies' state at `t_end`: every link pair's slack takes the
+    /// step's travel, and the link bodies move to their links.
+    fn commit_multibodies(
+        &mut self,
+        trials: Vec<(impulse_multibody::Simulation, Vec<LinkTravel>)>,
+        t_end: f64,
+    ) -> Result<(), SimError> {
+        for (mi, (sim, travel)) in trials.into_iter().enumerate() {
+            for k in 0..self.multibodies[mi].links.len() {
+                let (id, slot) = self.multibodies[mi].links[k];
+                let t = &travel[id.index()];
+                let pairs: Vec<(u32, u32)> = self.heap.pairs_of(slot).collect();
+                for p in pairs {
+                    let side = usize::from(p.0 != slot);
+                    if let Some(state) = self.pairs.get_mut(&p) {
+                        if let Some(s) = &mut state.slack[side] {
+                            s.delta = s.update(t.speed_along(s.d, s.reach), t_end).0;
+                            s.t_l = t_end;
+                        }
+                    }
+                }
+            }
+            self.multibodies[mi].sim = sim;
+            self.sync_links(mi)?;
+        }
+        Ok(())
+    }
+}
