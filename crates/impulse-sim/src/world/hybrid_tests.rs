@@ -347,3 +347,172 @@ fn no_collision_of_a_link_is_missed() {
         -s.worst
     );
 }
+
+/// Linear and angular momentum (about the world origin) of everything that moves: rigid
+/// bodies from their states, multibodies from theirs (not from the impulses applied).
+fn momentum(w: &World) -> (DVec3, DVec3) {
+    let mut p = DVec3::ZERO;
+    let mut l = DVec3::ZERO;
+    for (_, b) in w.bodies() {
+        p += b.linear_momentum();
+        l += b.angular_momentum();
+    }
+    for h in w.multibody_handles() {
+        let sim = w.multibody(h).unwrap();
+        let model = sim.model();
+        let mut ws = impulse_multibody::Workspace::new(model);
+        ws.update_kinematics(model, sim.q(), sim.v()).unwrap();
+        let m = ws.momentum(model);
+        p += m.f;
+        l += m.tau;
+    }
+    (p, l)
+}
+
+/// A floating random tree and a ball in zero gravity, sent at each other, and a second
+/// floating tree: through every collision the loop resolves (link–ball, link–link), the
+/// total linear and angular momentum read from the states stay what they were, and the
+/// energy never rises (e ≤ 1, no gravity, no actuation).
+#[test]
+fn floating_mechanisms_and_a_ball_conserve_momentum_through_their_collisions() {
+    use rand::{RngExt, SeedableRng};
+    let mut r = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(5);
+    let mut total_contacts = 0;
+    for case in 0..30 {
+        let mut settings = WorldSettings::new(EPS);
+        settings.gravity = DVec3::ZERO;
+        settings.default_contact.restitution = r.random_range(0.0..1.0);
+        settings.default_contact.friction = r.random_range(0.0..1.0);
+        let mut w = World::new(settings).unwrap();
+        for (k, x) in [-0.4, 0.4].into_iter().enumerate() {
+            let mut b = ModelBuilder::new(BaseKind::Floating);
+            let (inertia, shape) = rod(r.random_range(0.5..2.0), DVec3::new(0.03, 0.03, 0.1), 0.0);
+            b.link("base", inertia);
+            let mut shapes = vec![LinkShape {
+                link: "base".into(),
+                shape,
+                material: "m".into(),
+            }];
+            let n = r.random_range(1..=3usize);
+            for j in 0..n {
+                let (inertia, shape) =
+                    rod(r.random_range(0.2..1.0), DVec3::new(0.02, 0.02, 0.06), 0.07);
+                let name = format!("l{j}");
+                let parent = if j == 0 {
+                    "base".to_owned()
+                } else {
+                    format!("l{}", j - 1)
+                };
+                let at = if j == 0 { -0.1 } else { -0.14 };
+                b.link(&name, inertia).joint(JointSpec::revolute(
+                    &format!("j{j}"),
+                    &parent,
+                    &name,
+                    Pose::from_translation(DVec3::new(0.0, 0.0, at)),
+                    DVec3::new(r.random_range(-1.0..1.0), 1.0, r.random_range(-1.0..1.0)),
+                ));
+                shapes.push(LinkShape {
+                    link: name,
+                    shape,
+                    material: "m".into(),
+                });
+            }
+            let model = b.build().unwrap();
+            let mut q = model.neutral_configuration();
+            q[0] = x;
+            q[2] = 0.3 * k as f64;
+            let mut v = vec![0.0; model.nv()];
+            v[0] = -x * r.random_range(1.0..4.0); // toward the middle
+            for vi in v.iter_mut().skip(3) {
+                *vi = r.random_range(-3.0..3.0);
+            }
+            // A tight integrator: between collisions momentum drifts only by its error.
+            let tight = Integrator::AdaptiveRk4(impulse_multibody::AdaptiveRk4 {
+                rel_tol: 1e-12,
+                abs_tol: 1e-12,
+                ..impulse_multibody::AdaptiveRk4::default()
+            });
+            let sim = Simulation::new(model, q, v, tight).unwrap();
+            w.add_multibody(&format!("m{k}"), sim, shapes).unwrap();
+        }
+        w.add_body(
+            &BodyDesc::new("ball", ShapeDesc::sphere(0.05))
+                .at([0.0, 0.0, 0.05])
+                .with_velocity([0.0, 0.0, -0.5])
+                .with_density(2000.0),
+        )
+        .unwrap();
+        let (p0, l0) = momentum(&w);
+        let mut e = w.kinetic_energy();
+        let scale = (p0.length() + l0.length()).max(1.0);
+        while w.time() < 1.0 {
+            w.step_until(w.time() + 0.01).unwrap();
+            let (p, l) = momentum(&w);
+            assert!(
+                (p - p0).length() < 1e-9 * scale,
+                "case {case}: p {p} vs {p0}"
+            );
+            assert!(
+                (l - l0).length() < 1e-9 * scale,
+                "case {case}: L {l} vs {l0}"
+            );
+            let e1 = w.kinetic_energy();
+            assert!(e1 <= e * (1.0 + 1e-9), "case {case}: energy {e1} > {e}");
+            e = e1;
+        }
+        total_contacts += w.counters().link_contacts;
+    }
+    assert!(
+        total_contacts > 30,
+        "too few collisions to test: {total_contacts}"
+    );
+}
+
+/// Malformed additions are errors naming the multibody and link, and leave the world as it
+/// was; a link's body refuses the rigid-body API.
+#[test]
+fn malformed_multibodies_are_refused_by_name() {
+    let mut w = world();
+    w.add_body(&floor()).unwrap();
+    let pivot = DVec3::new(0.0, 0.0, 1.0);
+    let expect = |r: Result<crate::MultibodyHandle, crate::SimError>, words: &[&str]| {
+        let e = r.expect_err("must be refused").to_string();
+        for word in words {
+            assert!(e.contains(word), "{e:?} should name {word:?}");
+        }
+    };
+    let (sim, mut shapes) = pendulum(pivot, 0.0, 0.0);
+    shapes[0].link = "arm".into();
+    expect(
+        w.add_multibody("p", sim, shapes),
+        &["\"p\"", "\"arm\"", "no such link"],
+    );
+    let (sim, mut shapes) = pendulum(pivot, 0.0, 0.0);
+    shapes.push(shapes[0].clone());
+    expect(
+        w.add_multibody("p", sim, shapes),
+        &["\"rod\"", "two shapes"],
+    );
+    let (sim, shapes) = pendulum(pivot, 0.0, 0.0);
+    expect(w.add_multibody("", sim, shapes), &["name"]);
+    // Hanging from 0.2 m, the rod (0.5 m) would be 0.3 m into the floor.
+    let (sim, shapes) = pendulum(DVec3::new(0.0, 0.0, 0.2), 0.0, 0.0);
+    assert!(matches!(
+        w.add_multibody("p", sim, shapes),
+        Err(crate::SimError::Overlap { .. })
+    ));
+    assert_eq!(w.len(), 1, "nothing was added");
+    assert!(w.multibody_handles().is_empty());
+    let (sim, shapes) = pendulum(pivot, 0.0, 0.0);
+    let h = w.add_multibody("p", sim, shapes).unwrap();
+    let (sim, shapes) = pendulum(pivot + DVec3::X, 0.0, 0.0);
+    expect(w.add_multibody("p", sim, shapes), &["\"p\"", "name"]);
+    let rod = w.link_body(h, "rod").unwrap();
+    assert_eq!(w.handle("p/rod"), Some(rod));
+    let e = w
+        .set_pose(rod, DVec3::ZERO, glam::DQuat::IDENTITY)
+        .unwrap_err();
+    assert!(e.to_string().contains("link of multibody \"p\""), "{e}");
+    assert!(w.remove_body(rod).is_err());
+    assert!(w.set_velocity(rod, DVec3::X, DVec3::ZERO).is_err());
+}
