@@ -392,7 +392,7 @@ pub(crate) struct Rhs<'a> {
 impl Accel for Rhs<'_> {
     fn accel(
         &mut self,
-        _t: f64,
+        t: f64,
         q: &[f64],
         v: &[f64],
         vdot: &mut [f64],
@@ -402,7 +402,7 @@ impl Accel for Rhs<'_> {
         self.model.add_passive_forces(q, v, self.tau)?;
         forward_dynamics(self.model, self.ws, q, v, self.tau, None, vdot)?;
         if let Some(track) = self.track.as_deref_mut() {
-            crate::travel::record(self.model, self.ws, track);
+            crate::travel::record(self.model, self.ws, t, track);
         }
         if !self.resting.is_empty() {
             let joints: Vec<usize> = self.resting.iter().map(|s| s.joint).collect();

@@ -108,7 +108,7 @@ pub use faer::Mat;
 pub use integrate::{AdaptiveRk4, Integrator, IntegratorStats};
 pub use limit::{JointLimit, LimitStats};
 pub use model::{BaseKind, JointPassive, JointSpec, JointType, LinkId, Model, ModelBuilder};
-pub use travel::{LinkKinematics, LinkTravel};
+pub use travel::{LinkKinematics, LinkTravel, TravelSample};
 
 /// Numerical tolerances of this crate, each with its reason.
 pub mod tol {

@@ -28,12 +28,42 @@ pub struct LinkKinematics {
     pub omega: DVec3,
     /// Acceleration of the link frame's origin (m/s², gravity included).
     pub acceleration: DVec3,
+    /// Angular acceleration (rad/s²).
+    pub angular_acceleration: DVec3,
+}
+
+/// One sampled state of a link (world frame, link frame origin).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TravelSample {
+    /// The simulation's time of the sample (s).
+    pub t: f64,
+    /// Position of the origin.
+    pub origin: DVec3,
+    /// Velocity of the origin.
+    pub velocity: DVec3,
+    /// Angular velocity.
+    pub omega: DVec3,
+}
+
+impl TravelSample {
+    /// The largest speed along `d` of any point within `reach` of the origin at this state:
+    /// `v·d + r Σ_c |ω_c| ‖e_c × d‖` (the per-instant form of Fig. 5.4's k).
+    #[must_use]
+    pub fn speed_along(&self, d: DVec3, reach: f64) -> f64 {
+        let dd = d.length_squared();
+        let mut k = self.velocity.dot(d);
+        for c in 0..3 {
+            k += reach * self.omega[c].abs() * (dd - d[c] * d[c]).max(0.0).sqrt();
+        }
+        k
+    }
 }
 
 /// The range of a link's motion over the derivative evaluations of one or more integration
 /// steps (world frame, link frame origin): Fig. 5.3's min/max of the position, Fig. 5.4's
-/// componentwise min/max of the linear velocity and max of each |ω| component.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// componentwise min/max of the linear velocity and max of each |ω| component, and every
+/// sampled state with its time (in the order sampled).
+#[derive(Clone, Debug, PartialEq)]
 pub struct LinkTravel {
     /// Componentwise least position of the origin seen.
     pub origin_min: DVec3,
@@ -47,6 +77,8 @@ pub struct LinkTravel {
     pub omega_abs_max: DVec3,
     /// States sampled (0: nothing recorded, every range empty).
     pub samples: u64,
+    /// The sampled states.
+    pub path: Vec<TravelSample>,
 }
 
 impl Default for LinkTravel {
@@ -64,10 +96,17 @@ impl LinkTravel {
         velocity_max: DVec3::NEG_INFINITY,
         omega_abs_max: DVec3::ZERO,
         samples: 0,
+        path: Vec::new(),
     };
 
-    /// Adds one sampled state.
-    pub fn add(&mut self, origin: DVec3, velocity: DVec3, omega: DVec3) {
+    /// Adds one sampled state at time `t`.
+    pub fn add(&mut self, t: f64, origin: DVec3, velocity: DVec3, omega: DVec3) {
+        self.path.push(TravelSample {
+            t,
+            origin,
+            velocity,
+            omega,
+        });
         self.origin_min = self.origin_min.min(origin);
         self.origin_max = self.origin_max.max(origin);
         self.velocity_min = self.velocity_min.min(velocity);
@@ -86,6 +125,7 @@ impl LinkTravel {
             velocity_max: self.velocity_max.max(other.velocity_max),
             omega_abs_max: self.omega_abs_max.max(other.omega_abs_max),
             samples: self.samples + other.samples,
+            path: self.path.iter().chain(&other.path).copied().collect(),
         }
     }
 
@@ -139,12 +179,13 @@ fn link_frame(model: &Model, ws: &Workspace, l: usize) -> (Xform, Twist) {
 }
 
 /// Records the state of every link (indexed as the model's links) into `travel`, after a
-/// forward-dynamics pass filled `ws` with the state's joint transforms and velocities.
-pub(crate) fn record(model: &Model, ws: &mut Workspace, travel: &mut [LinkTravel]) {
+/// forward-dynamics pass filled `ws` with the state's joint transforms and velocities at time
+/// `t`.
+pub(crate) fn record(model: &Model, ws: &mut Workspace, t: f64, travel: &mut [LinkTravel]) {
     compose_world(model, ws);
-    for (l, t) in travel.iter_mut().enumerate() {
+    for (l, tr) in travel.iter_mut().enumerate() {
         let (x, twist) = link_frame(model, ws, l);
-        t.add(x.p, twist.v + twist.w.cross(x.p), twist.w);
+        tr.add(t, x.p, twist.v + twist.w.cross(x.p), twist.w);
     }
 }
 
@@ -160,18 +201,19 @@ pub(crate) fn kinematics(model: &Model, ws: &mut Workspace) -> Vec<LinkKinematic
             let (x, twist) = link_frame(model, ws, l);
             let p = x.p;
             let velocity = twist.v + twist.w.cross(p);
-            let acceleration = match model.links[l].body {
+            let (acceleration, angular_acceleration) = match model.links[l].body {
                 Some(b) => {
                     let a = ws.world[b].motion_to_parent(&ws.bodies[b].a) + g;
-                    a.v + a.w.cross(p) + twist.w.cross(velocity)
+                    (a.v + a.w.cross(p) + twist.w.cross(velocity), a.w)
                 }
-                None => DVec3::ZERO,
+                None => (DVec3::ZERO, DVec3::ZERO),
             };
             LinkKinematics {
                 pose: x.to_pose(),
                 velocity,
                 omega: twist.w,
                 acceleration,
+                angular_acceleration,
             }
         })
         .collect()

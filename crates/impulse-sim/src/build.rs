@@ -117,6 +117,11 @@ fn pieces(
     }
 }
 
+/// The mass properties of a shape at density 1, in its own frame.
+pub(crate) fn mass_properties(desc: &ShapeDesc, base_dir: &Path) -> Result<MassProperties, String> {
+    pieces(desc, base_dir).map(|(_, mp)| mp)
+}
+
 /// The collision shape a description gives, in its own frame (a multibody link's shape).
 pub(crate) fn shape(desc: &ShapeDesc, base_dir: &Path) -> Result<Shape, String> {
     let (parts, _) = pieces(desc, base_dir)?;

@@ -45,6 +45,7 @@ impl SceneDesc {
             accuracy: AccuracyDesc::default(),
             contact_model: crate::sustained::ContactMode::default(),
             bodies: Vec::new(),
+            multibodies: Vec::new(),
         }
     }
 

@@ -36,6 +36,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::SimError;
 
+mod multibody;
+
+pub use multibody::{
+    BaseDesc, ControllerDesc, InertiaDesc, JointDesc, JointKindDesc, LimitDesc, LinkDesc,
+    MultibodyDesc,
+};
+
 /// A whole scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename = "Scene", deny_unknown_fields)]
@@ -77,6 +84,10 @@ pub struct SceneDesc {
     pub contact_model: crate::sustained::ContactMode,
     /// The bodies.
     pub bodies: Vec<BodyDesc>,
+    /// Multibodies: jointed mechanisms whose links collide with everything else (thesis
+    /// ch. 5; [`MultibodyDesc`]).
+    #[serde(default)]
+    pub multibodies: Vec<MultibodyDesc>,
 }
 
 /// Most frames a run may record (`duration × output_rate`): beyond this the recording alone
@@ -419,7 +430,7 @@ impl SceneDesc {
             field: field.into(),
             problem,
         };
-        if self.bodies.is_empty() {
+        if self.bodies.is_empty() && self.multibodies.is_empty() {
             return Err(scene("bodies", "the scene has no bodies".into()));
         }
         if self.bodies.len() > MAX_BODIES {
@@ -738,7 +749,7 @@ fn finite(x: f64) -> Result<(), String> {
     }
 }
 
-fn positive(x: f64) -> Result<(), String> {
+pub(crate) fn positive(x: f64) -> Result<(), String> {
     if x.is_finite() && x > 0.0 {
         Ok(())
     } else {
@@ -754,7 +765,7 @@ fn non_negative(x: f64) -> Result<(), String> {
     }
 }
 
-fn finite3(v: &[f64; 3]) -> Result<(), String> {
+pub(crate) fn finite3(v: &[f64; 3]) -> Result<(), String> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {
@@ -771,7 +782,7 @@ fn nonzero3(v: &[f64; 3]) -> Result<(), String> {
     }
 }
 
-fn check_rotation(r: &RotationDesc) -> Result<(), String> {
+pub(crate) fn check_rotation(r: &RotationDesc) -> Result<(), String> {
     match r {
         RotationDesc::Identity => Ok(()),
         RotationDesc::AxisAngle { axis, degrees } => {
@@ -847,7 +858,7 @@ fn check_contact(friction: f64, restitution: f64) -> Result<(), (&'static str, S
     Ok(())
 }
 
-fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
+pub(crate) fn check_shape(s: &ShapeDesc, top: bool) -> Result<(), (String, String)> {
     let err = |f: &str, p: String| (f.to_string(), p);
     match s {
         ShapeDesc::Sphere { radius } => positive(*radius).map_err(|p| err("radius", p)),

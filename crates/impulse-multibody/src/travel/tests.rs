@@ -15,13 +15,14 @@ fn tight() -> Integrator {
 
 /// Velocity of every link's frame origin, from the workspace's own kinematics (an independent
 /// path: `update_kinematics` + `point_velocity`, not the travel module).
-fn origin_velocities(sim: &mut Simulation) -> Vec<(DVec3, DVec3)> {
+fn origin_velocities(sim: &mut Simulation) -> Vec<(DVec3, DVec3, DVec3)> {
     let model = sim.model().clone();
     let ws: &Workspace = sim.kinematics().unwrap();
     (0..model.link_count())
         .map(|l| {
             let p = ws.link_pose(&model, LinkId(l)).translation;
-            (p, ws.point_velocity(&model, LinkId(l), p))
+            let w = ws.link_twist_world(&model, LinkId(l)).w;
+            (p, ws.point_velocity(&model, LinkId(l), p), w)
         })
         .collect()
 }
@@ -56,6 +57,13 @@ fn link_accelerations_match_finite_differences_of_the_trajectory() {
                 (fd - k.acceleration).length() < 1e-4 * scale,
                 "case {case} link {l}: {} vs finite difference {fd}",
                 k.acceleration
+            );
+            let fw = (-3.0 * v0[l].2 + 4.0 * v1[l].2 - v2[l].2) / (2.0 * h);
+            let scale = 1.0 + k.angular_acceleration.length();
+            assert!(
+                (fw - k.angular_acceleration).length() < 1e-4 * scale,
+                "case {case} link {l}: α {} vs finite difference {fw}",
+                k.angular_acceleration
             );
         }
     }
@@ -98,7 +106,7 @@ fn tracked_travel_bounds_every_sampled_state_and_the_motion_between() {
             for _ in 0..20 {
                 let arm = unit(&mut r) * reach;
                 let mut sample = LinkTravel::EMPTY;
-                sample.add(kin[l].pose.translation, vel, w);
+                sample.add(0.0, kin[l].pose.translation, vel, w);
                 let sample = LinkTravel::EMPTY.union(&sample);
                 assert!((vel + w.cross(arm)).dot(d) <= sample.speed_along(d, reach) + 1e-12);
             }

@@ -308,6 +308,7 @@ impl World {
 /// The thesis's prediction of a link's motion from its kinematics now.
 pub(crate) fn link_motion(k: &LinkKinematics) -> Result<impulse_collide::Motion, String> {
     LinkMotion::new(k.pose.translation, k.velocity, k.acceleration, k.omega)
+        .and_then(|m| m.with_angular_acceleration(k.angular_acceleration))
         .map(impulse_collide::Motion::Link)
         .map_err(|e| e.to_string())
 }

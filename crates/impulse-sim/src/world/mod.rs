@@ -550,6 +550,10 @@ impl World {
             )?;
         }
         world.add_bodies(&desc.bodies)?;
+        for m in &desc.multibodies {
+            let (sim, shapes) = m.build(world.gravity, &scene.base_dir)?;
+            world.add_multibody(&m.name, sim, shapes)?;
+        }
         Ok(world)
     }
 

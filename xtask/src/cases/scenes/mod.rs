@@ -14,9 +14,11 @@
 //! - `resting.rs`: V11 balls in dish, V13 block drop, V16 dominos, V17 coins, feeder chute;
 //! - `rattleback.rs`: V12, with the reversing direction predicted from the body's
 //!   inertia–curvature skew before the run;
+//! - `hybrid.rs`: V19 triple pendulum (multibodies in the world, §7.2);
 //! - `perturb.rs` (tests): each case fails when its scene is perturbed in the way it guards
 //!   against.
 
+mod hybrid;
 mod impacts;
 #[cfg(test)]
 mod perturb;
@@ -77,6 +79,7 @@ pub fn scene_checks() -> Vec<SceneCheck> {
     all.extend(resting::checks());
     all.extend(sliding::checks());
     all.extend(rattleback::checks());
+    all.extend(hybrid::checks());
     all
 }
 
@@ -272,7 +275,7 @@ pub(crate) fn rotation(r: &RotationDesc) -> DQuat {
 /// The promise of chapter 2: bodies never interpenetrate by more than ε_c. The metric is the
 /// largest penetration depth the independent monitor measured — at every recorded frame, and
 /// at every loop step when the checking mode was on — in units of ε_c.
-fn no_penetration(r: &Run<'_>) -> Metric {
+pub(super) fn no_penetration(r: &Run<'_>) -> Metric {
     Metric::new(
         "max_penetration_over_eps_c",
         r.rec.max_penetration() / r.world.collision_epsilon(),

@@ -1,0 +1,496 @@
+//! Multibodies in scene files (thesis ch. 5): links with their shapes and masses, joints with
+//! springs, dampers, friction and limits, the initial joint state, and joint controllers.
+//!
+//! ```ron
+//! Multibody(
+//!     name: "pendulum",
+//!     base: Fixed,
+//!     position: (0.0, 0.0, 1.0),
+//!     links: [
+//!         Link(name: "support"),
+//!         Link(name: "rod", shape: Some(Cuboid(half_extents: (0.02, 0.02, 0.25))),
+//!              position: (0.0, 0.0, -0.25), mass: Some(Mass(1.0))),
+//!     ],
+//!     joints: [
+//!         Joint(name: "hinge", kind: Revolute, parent: "support", child: "rod",
+//!               axis: (0.0, 1.0, 0.0), q: 1.0),
+//!     ],
+//! )
+//! ```
+
+use std::path::Path;
+
+use glam::{DMat3, DQuat, DVec3};
+use impulse_geom::{Pose, SpatialInertia};
+use impulse_multibody::{
+    AdaptiveRk4, BaseKind, Integrator, JointLimit, JointPassive, JointPd, JointPid, JointSpec,
+    ModelBuilder, Simulation,
+};
+use serde::{Deserialize, Serialize};
+
+use super::{MassDesc, RotationDesc, ShapeDesc, check_rotation, check_shape, finite3, positive};
+use crate::build::rotation;
+use crate::error::SimError;
+use crate::world::LinkShape;
+
+fn default_material() -> String {
+    "default".to_string()
+}
+
+/// How a multibody's base moves.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BaseDesc {
+    /// The root link is welded to the world at the multibody's pose.
+    #[default]
+    Fixed,
+    /// The root link floats freely (6 degrees of freedom), starting at the multibody's pose.
+    Floating,
+}
+
+/// The kind of a joint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum JointKindDesc {
+    /// Rotation about `axis` (rad).
+    Revolute,
+    /// Translation along `axis` (m).
+    Prismatic,
+    /// The child is welded to its parent.
+    Fixed,
+}
+
+/// A joint's travel limits, impulsive stops (thesis ch. 5: a collision in joint space).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Limit", deny_unknown_fields)]
+pub struct LimitDesc {
+    /// Lower limit (rad or m).
+    pub lower: f64,
+    /// Upper limit (rad or m).
+    pub upper: f64,
+    /// Newton restitution of the stop, in [0, 1]. Default `0`.
+    #[serde(default)]
+    pub restitution: f64,
+}
+
+/// One link.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Link", deny_unknown_fields)]
+pub struct LinkDesc {
+    /// Unique name within the multibody.
+    pub name: String,
+    /// Collision shape (`None`: the link collides with nothing).
+    #[serde(default)]
+    pub shape: Option<ShapeDesc>,
+    /// Position of the shape in the link frame (the link frame sits on its inboard joint).
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Orientation of the shape in the link frame.
+    #[serde(default)]
+    pub rotation: RotationDesc,
+    /// Mass from the shape's volume, by density or total mass (default density 1). A link
+    /// without a shape gets its mass from `inertia`, or none (a massless root).
+    #[serde(default)]
+    pub mass: Option<MassDesc>,
+    /// Explicit mass properties, in place of the shape's (a link without a shape).
+    #[serde(default)]
+    pub inertia: Option<InertiaDesc>,
+    /// Material name (contact table); `"default"` if omitted.
+    #[serde(default = "default_material")]
+    pub material: String,
+}
+
+/// Explicit mass properties of a link.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Inertia", deny_unknown_fields)]
+pub struct InertiaDesc {
+    /// Mass (> 0).
+    pub mass: f64,
+    /// Centre of mass in the link frame.
+    #[serde(default)]
+    pub com: [f64; 3],
+    /// Principal moments about the centre of mass, link axes (each > 0).
+    pub moments: [f64; 3],
+}
+
+/// One joint.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Joint", deny_unknown_fields)]
+pub struct JointDesc {
+    /// Unique name within the multibody.
+    pub name: String,
+    /// Its kind.
+    pub kind: JointKindDesc,
+    /// The parent link.
+    pub parent: String,
+    /// The child link.
+    pub child: String,
+    /// Position of the joint frame in the parent link's frame.
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Orientation of the joint frame in the parent link's frame.
+    #[serde(default)]
+    pub rotation: RotationDesc,
+    /// The axis (joint frame; revolute and prismatic joints). Default `(0, 0, 1)`.
+    #[serde(default = "default_axis")]
+    pub axis: [f64; 3],
+    /// Initial position (rad or m).
+    #[serde(default)]
+    pub q: f64,
+    /// Initial rate (rad/s or m/s).
+    #[serde(default)]
+    pub qd: f64,
+    /// A linear spring `(stiffness, rest position)`.
+    #[serde(default)]
+    pub spring: Option<(f64, f64)>,
+    /// Viscous damping.
+    #[serde(default)]
+    pub damping: f64,
+    /// Constant (Coulomb) joint friction.
+    #[serde(default)]
+    pub friction: f64,
+    /// Travel limits as impulsive stops.
+    #[serde(default)]
+    pub limit: Option<LimitDesc>,
+}
+
+fn default_axis() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+/// A joint controller (thesis §5.4), updated `rate` times per second with zero-order hold.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ControllerDesc {
+    /// `τ = −k_p (q − target) − k_v (q̇ − target_rate)`; `kp: 0` regulates velocity.
+    Pd {
+        /// The joint.
+        joint: String,
+        /// Position gain.
+        kp: f64,
+        /// Velocity gain.
+        kv: f64,
+        /// Desired position.
+        #[serde(default)]
+        target: f64,
+        /// Desired rate.
+        #[serde(default)]
+        target_rate: f64,
+        /// Updates per second.
+        rate: f64,
+    },
+    /// PD plus an integral term `k_i ∫(target − q)`.
+    Pid {
+        /// The joint.
+        joint: String,
+        /// Position gain.
+        kp: f64,
+        /// Velocity gain.
+        kv: f64,
+        /// Integral gain.
+        ki: f64,
+        /// Desired position.
+        #[serde(default)]
+        target: f64,
+        /// Updates per second.
+        rate: f64,
+    },
+}
+
+/// A multibody of a scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Multibody", deny_unknown_fields)]
+pub struct MultibodyDesc {
+    /// Unique name (its links' bodies are `"<name>/<link>"`).
+    pub name: String,
+    /// Fixed or floating base.
+    #[serde(default)]
+    pub base: BaseDesc,
+    /// Position of the root link's frame (world).
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Orientation of the root link's frame (world).
+    #[serde(default)]
+    pub rotation: RotationDesc,
+    /// Initial velocity of a floating root link's frame origin (world).
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    /// Initial angular velocity of a floating root link (world, rad/s).
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+    /// The links; the first is the root.
+    pub links: Vec<LinkDesc>,
+    /// The joints (each child's inboard joint).
+    #[serde(default)]
+    pub joints: Vec<JointDesc>,
+    /// Joint controllers.
+    #[serde(default)]
+    pub controllers: Vec<ControllerDesc>,
+    /// Relative error tolerance of the adaptive RK4 integrator per step. Default `1e-9`.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+}
+
+fn default_tolerance() -> f64 {
+    1e-9
+}
+
+impl MultibodyDesc {
+    /// Builds the multibody's simulation and its links' shapes, in gravity `gravity`; shapes
+    /// from OBJ files resolve against `base_dir`.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] or [`SimError::Geometry`] naming the multibody and the link,
+    /// joint or controller that is wrong (an unknown parent, a loop, a zero-mass link with
+    /// children, non-finite numbers, NaN gains, a controller on a missing joint).
+    pub fn build(
+        &self,
+        gravity: DVec3,
+        base_dir: &Path,
+    ) -> Result<(Simulation, Vec<LinkShape>), SimError> {
+        let what = format!("multibody \"{}\"", self.name);
+        let bad = |field: String, problem: String| SimError::Invalid {
+            what: what.clone(),
+            field,
+            problem,
+        };
+        if self.name.is_empty() {
+            return Err(bad("name".into(), "is empty".into()));
+        }
+        if self.links.is_empty() {
+            return Err(bad(
+                "links".into(),
+                "a multibody needs at least one link".into(),
+            ));
+        }
+        finite3(&self.position).map_err(|p| bad("position".into(), p))?;
+        finite3(&self.velocity).map_err(|p| bad("velocity".into(), p))?;
+        finite3(&self.angular_velocity).map_err(|p| bad("angular_velocity".into(), p))?;
+        check_rotation(&self.rotation).map_err(|p| bad("rotation".into(), p))?;
+        positive(self.tolerance).map_err(|p| bad("tolerance".into(), p))?;
+        let base = match self.base {
+            BaseDesc::Fixed => BaseKind::Fixed,
+            BaseDesc::Floating => BaseKind::Floating,
+        };
+        let placement = Pose::new(rotation(&self.rotation), DVec3::from_array(self.position));
+        let mut b = ModelBuilder::new(base);
+        b.gravity(gravity);
+        let mut shapes = Vec::new();
+        for (k, l) in self.links.iter().enumerate() {
+            let field = |f: &str| format!("links[{k}] \"{}\".{f}", l.name);
+            let (inertia, shape) = link_mass(l, base_dir).map_err(|(f, p)| bad(field(&f), p))?;
+            b.link(&l.name, inertia);
+            if let Some(s) = shape {
+                shapes.push(LinkShape {
+                    link: l.name.clone(),
+                    shape: s,
+                    material: l.material.clone(),
+                });
+            }
+        }
+        let mut q_joints = Vec::new();
+        let mut v_joints = Vec::new();
+        let root = &self.links[0].name;
+        for (k, j) in self.joints.iter().enumerate() {
+            let field = |f: &str| format!("joints[{k}] \"{}\".{f}", j.name);
+            finite3(&j.position).map_err(|p| bad(field("position"), p))?;
+            check_rotation(&j.rotation).map_err(|p| bad(field("rotation"), p))?;
+            finite3(&j.axis).map_err(|p| bad(field("axis"), p))?;
+            for (f, x) in [
+                ("q", j.q),
+                ("qd", j.qd),
+                ("damping", j.damping),
+                ("friction", j.friction),
+            ] {
+                if !x.is_finite() {
+                    return Err(bad(field(f), format!("{x} is not finite")));
+                }
+            }
+            let mut origin = Pose::new(rotation(&j.rotation), DVec3::from_array(j.position));
+            if base == BaseKind::Fixed && &j.parent == root {
+                // A fixed root's frame is the multibody's placement in the world.
+                origin = placement * origin;
+            }
+            let axis = DVec3::from_array(j.axis);
+            let mut spec = match j.kind {
+                JointKindDesc::Revolute => {
+                    JointSpec::revolute(&j.name, &j.parent, &j.child, origin, axis)
+                }
+                JointKindDesc::Prismatic => {
+                    JointSpec::prismatic(&j.name, &j.parent, &j.child, origin, axis)
+                }
+                JointKindDesc::Fixed => JointSpec::fixed(&j.name, &j.parent, &j.child, origin),
+            };
+            let (stiffness, rest) = j.spring.unwrap_or((0.0, 0.0));
+            if !(stiffness.is_finite() && rest.is_finite()) {
+                return Err(bad(
+                    field("spring"),
+                    format!("({stiffness}, {rest}) is not finite"),
+                ));
+            }
+            spec = spec.with_passive(JointPassive {
+                stiffness,
+                rest,
+                damping: j.damping,
+                friction: j.friction,
+                ..JointPassive::default()
+            });
+            if let Some(lim) = j.limit {
+                spec = spec.with_limit(JointLimit::new(lim.lower, lim.upper, lim.restitution));
+            }
+            if j.kind != JointKindDesc::Fixed {
+                q_joints.push((j.name.clone(), j.q));
+                v_joints.push(j.qd);
+            }
+            b.joint(spec);
+        }
+        let model = b.build().map_err(|e| bad("joints".into(), e.to_string()))?;
+        // Joint coordinates in the model's order (depth first from the root).
+        let mut q = model.neutral_configuration();
+        let mut v = vec![0.0; model.nv()];
+        let (qo, vo) = (model.nq() - model.joint_count(), model.base_dofs());
+        for ((name, qj), vj) in q_joints.iter().zip(&v_joints) {
+            let i = model.joint_index(name).ok_or_else(|| {
+                bad(
+                    format!("joints \"{name}\""),
+                    "not a moving joint of the model".into(),
+                )
+            })?;
+            q[qo + i] = *qj;
+            v[vo + i] = *vj;
+        }
+        if base == BaseKind::Floating {
+            let r = placement.rotation;
+            q[..3].copy_from_slice(&self.position);
+            q[3..7].copy_from_slice(&[r.x, r.y, r.z, r.w]);
+            // The base twist in base coordinates: velocity of the base origin, ω.
+            let inv = r.inverse();
+            let vb = inv * DVec3::from_array(self.velocity);
+            let wb = inv * DVec3::from_array(self.angular_velocity);
+            v[..6].copy_from_slice(&[vb.x, vb.y, vb.z, wb.x, wb.y, wb.z]);
+        }
+        let integrator = Integrator::AdaptiveRk4(AdaptiveRk4 {
+            rel_tol: self.tolerance,
+            ..AdaptiveRk4::default()
+        });
+        let mut sim = Simulation::new(model, q, v, integrator)
+            .map_err(|e| bad("state".into(), e.to_string()))?;
+        for (k, c) in self.controllers.iter().enumerate() {
+            let field = format!("controllers[{k}]");
+            let (joint, rate) = match c {
+                ControllerDesc::Pd { joint, rate, .. }
+                | ControllerDesc::Pid { joint, rate, .. } => (joint, *rate),
+            };
+            positive(rate).map_err(|p| bad(format!("{field}.rate"), p))?;
+            let index = sim.model().joint_index(joint).ok_or_else(|| {
+                bad(
+                    format!("{field}.joint"),
+                    format!("\"{joint}\" is not a moving joint of the multibody"),
+                )
+            })?;
+            let ctrl: Box<dyn impulse_multibody::Controller> = match c {
+                ControllerDesc::Pd {
+                    kp,
+                    kv,
+                    target,
+                    target_rate,
+                    ..
+                } => {
+                    let mut pd = JointPd::new(index, *kp, *kv, 1.0 / rate);
+                    pd.q_des = *target;
+                    pd.qd_des = *target_rate;
+                    Box::new(pd)
+                }
+                ControllerDesc::Pid {
+                    kp, kv, ki, target, ..
+                } => {
+                    let mut pid = JointPid::new(index, *kp, *kv, *ki, 1.0 / rate);
+                    pid.pd.q_des = *target;
+                    Box::new(pid)
+                }
+            };
+            sim.add_controller(ctrl)
+                .map_err(|e| bad(field.clone(), e.to_string()))?;
+        }
+        Ok((sim, shapes))
+    }
+}
+
+/// A link's spatial inertia (link frame) and collision shape (link frame), from its shape and
+/// mass or its explicit inertia; `(field, problem)` on error.
+fn link_mass(
+    l: &LinkDesc,
+    base_dir: &Path,
+) -> Result<(SpatialInertia, Option<ShapeDesc>), (String, String)> {
+    if l.name.is_empty() {
+        return Err(("name".into(), "is empty".into()));
+    }
+    finite3(&l.position).map_err(|p| ("position".into(), p))?;
+    check_rotation(&l.rotation).map_err(|p| ("rotation".into(), p))?;
+    let placed = l.shape.as_ref().map(|s| {
+        let moved = |shape: &ShapeDesc| super::PartDesc {
+            shape: shape.clone(),
+            position: l.position,
+            rotation: l.rotation,
+        };
+        match s {
+            ShapeDesc::Compound { parts } => ShapeDesc::Compound {
+                parts: parts
+                    .iter()
+                    .map(|p| {
+                        let pose = Pose::new(rotation(&l.rotation), DVec3::from_array(l.position))
+                            * Pose::new(rotation(&p.rotation), DVec3::from_array(p.position));
+                        let r: DQuat = pose.rotation;
+                        super::PartDesc {
+                            shape: p.shape.clone(),
+                            position: pose.translation.to_array(),
+                            rotation: RotationDesc::Quaternion(r.x, r.y, r.z, r.w),
+                        }
+                    })
+                    .collect(),
+            },
+            other => ShapeDesc::Compound {
+                parts: vec![moved(other)],
+            },
+        }
+    });
+    if let Some(s) = &placed {
+        check_shape(s, true).map_err(|(f, p)| (format!("shape.{f}"), p))?;
+    }
+    let inertia = match (&l.inertia, &placed) {
+        (Some(i), _) => {
+            positive(i.mass).map_err(|p| ("inertia.mass".to_string(), p))?;
+            finite3(&i.com).map_err(|p| ("inertia.com".to_string(), p))?;
+            for m in i.moments {
+                positive(m).map_err(|p| ("inertia.moments".to_string(), p))?;
+            }
+            SpatialInertia::new(
+                i.mass,
+                DVec3::from_array(i.com),
+                DMat3::from_diagonal(DVec3::from_array(i.moments)),
+            )
+        }
+        (None, Some(s)) => {
+            let mp = crate::build::mass_properties(s, base_dir).map_err(|p| ("shape".into(), p))?;
+            let scale = match l.mass {
+                None => crate::build::DEFAULT_DENSITY,
+                Some(MassDesc::Density(d)) => {
+                    positive(d).map_err(|p| ("mass.Density".to_string(), p))?;
+                    d
+                }
+                Some(MassDesc::Mass(m)) => {
+                    positive(m).map_err(|p| ("mass.Mass".to_string(), p))?;
+                    m / mp.mass
+                }
+            };
+            SpatialInertia::new(mp.mass * scale, mp.com, mp.inertia * scale)
+        }
+        (None, None) => {
+            if l.mass.is_some() {
+                return Err((
+                    "mass".into(),
+                    "a link without a shape takes its mass from `inertia`".into(),
+                ));
+            }
+            SpatialInertia::ZERO
+        }
+    };
+    Ok((inertia, placed))
+}
