@@ -197,3 +197,32 @@ fn plank_bridge_fails_without_its_second_support() {
         body(d, "right").position[0] = 0.36;
     });
 }
+
+/// V19 guards energy: a PD controller driving the shoulder toward a raised pose adds energy
+/// the check must see. (Run in the pure impulse model, which passes unperturbed as
+/// `V19-triple-pendulum-impulse` and is ten times faster here.)
+#[test]
+fn v19_fails_with_an_actuated_pendulum() {
+    fails("V19-triple-pendulum", "energy_rise_over_kick", |d| {
+        d.contact_model = impulse_sim::ContactMode::Impulse;
+        d.multibodies[0]
+            .controllers
+            .push(impulse_sim::scene::ControllerDesc::Pd {
+                joint: "shoulder".into(),
+                kp: 5.0,
+                kv: 0.1,
+                target: 2.5,
+                target_rate: 0.0,
+                rate: 100.0,
+            });
+    });
+}
+
+/// V19 guards the final rest: cut after one second the pendulum is still swinging.
+#[test]
+fn v19_fails_before_the_pendulum_comes_to_rest() {
+    fails("V19-triple-pendulum", "pendulum_rest_energy_rel", |d| {
+        d.contact_model = impulse_sim::ContactMode::Impulse;
+        d.duration = Some(1.0);
+    });
+}
