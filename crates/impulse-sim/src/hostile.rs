@@ -26,6 +26,21 @@ const VALID: &str = r#"Scene(
                 Part(shape: Box(half_extents: (0.02, 0.03, 0.03)), position: (0.1, 0.0, 0.0)),
              ]), position: (-0.4, 0.0, 0.3), rotation: AxisAngle(axis: (0.0, 1.0, 0.0), degrees: 10.0)),
     ],
+    multibodies: [
+        Multibody(name: "arm", base: Fixed, position: (0.7, 0.0, 0.5),
+            links: [
+                Link(name: "support"),
+                Link(name: "rod", shape: Some(Box(half_extents: (0.02, 0.02, 0.1))), position: (0.0, 0.0, -0.1), mass: Some(Mass(0.5))),
+                Link(name: "tip", shape: Some(Sphere(radius: 0.03)), position: (0.0, 0.0, -0.03), mass: Some(Density(2000.0))),
+            ],
+            joints: [
+                Joint(name: "shoulder", kind: Revolute, parent: "support", child: "rod", axis: (0.0, 1.0, 0.0), q: 0.5, qd: 1.0,
+                      damping: 0.01, limit: Some(Limit(lower: -1.0, upper: 1.0, restitution: 0.5))),
+                Joint(name: "slide", kind: Prismatic, parent: "rod", child: "tip", position: (0.0, 0.0, -0.2), spring: Some((50.0, 0.0))),
+            ],
+            controllers: [Pd(joint: "shoulder", kp: 2.0, kv: 0.1, rate: 100.0)],
+        ),
+    ],
 )"#;
 
 /// Parse, validate, build and run briefly; `Ok` or a typed error, and no panic.
@@ -38,6 +53,84 @@ fn attempt(text: &str) -> Result<(), SimError> {
 #[test]
 fn the_base_scene_is_valid_and_runs() {
     attempt(VALID).unwrap();
+}
+
+/// An error (of any kind) whose message names every one of `words`.
+fn expect_error(text: &str, words: &[&str]) {
+    match attempt(text) {
+        Err(e) => {
+            let m = e.to_string();
+            for w in words {
+                assert!(m.contains(w), "{m:?} should name {w:?}");
+            }
+        }
+        Ok(()) => panic!("wanted an error naming {words:?}"),
+    }
+}
+
+/// Malformed multibodies (issue 13): each is an error naming the multibody and the link,
+/// joint or controller at fault.
+#[test]
+fn malformed_multibodies_name_what_is_wrong() {
+    expect_error(
+        &VALID.replace("kind: Prismatic", "kind: Twisty"),
+        &["Twisty"],
+    );
+    expect_error(
+        &VALID.replace("parent: \"rod\"", "parent: \"nowhere\""),
+        &["multibody \"arm\"", "nowhere"],
+    );
+    // A massless link with a moving child: the model cannot be built.
+    expect_error(
+        &VALID.replace(
+            "Link(name: \"rod\", shape: Some(Box(half_extents: (0.02, 0.02, 0.1))), position: (0.0, 0.0, -0.1), mass: Some(Mass(0.5))),",
+            "Link(name: \"rod\"),",
+        ),
+        &["multibody \"arm\"", "rod"],
+    );
+    expect_error(
+        &VALID.replace("kp: 2.0", "kp: NaN"),
+        &["multibody \"arm\"", "controllers[0]", "shoulder"],
+    );
+    expect_error(
+        &VALID.replace("Pd(joint: \"shoulder\"", "Pd(joint: \"elbow\""),
+        &["multibody \"arm\"", "controllers[0]", "elbow"],
+    );
+    expect_error(
+        &VALID.replace("q: 0.5, qd: 1.0", "q: NaN, qd: 1.0"),
+        &["multibody \"arm\"", "shoulder", "q"],
+    );
+    expect_error(
+        &VALID.replace("q: 0.5, qd: 1.0", "q: 1.5, qd: 1.0"),
+        &["multibody \"arm\"", "state"],
+    );
+    expect_error(
+        &VALID.replace("Link(name: \"tip\"", "Link(name: \"rod\""),
+        &["multibody \"arm\"", "rod"],
+    );
+    expect_error(
+        &VALID.replace("mass: Some(Mass(0.5))", "mass: Some(Mass(-0.5))"),
+        &["multibody \"arm\"", "rod", "mass"],
+    );
+}
+
+/// A body spinning at 1e30 rad/s made every time-of-impact bound 1e-31 s long: the run
+/// crawled for ever (found by the random mutations). Refused at validation.
+#[test]
+fn absurd_speeds_are_refused() {
+    expect_invalid(
+        &VALID.replace(
+            "angular_velocity: (1.0, 2.0, 3.0)",
+            "angular_velocity: (1.0, 2.0, 1e30)",
+        ),
+        "body \"box\"",
+        "angular_velocity",
+    );
+    expect_invalid(
+        &VALID.replace("velocity: (0.1, 0.0, -0.2)", "velocity: (0.1, 0.0, -1e9)"),
+        "body \"box\"",
+        "velocity",
+    );
 }
 
 fn expect_invalid(text: &str, what: &str, field: &str) {

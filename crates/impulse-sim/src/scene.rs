@@ -123,6 +123,12 @@ pub const MAX_EPSILON_REL: f64 = 0.1;
 /// (the thesis uses 1e-3 to 1e-2 of the body sizes). Default `0.02`.
 pub const WARN_EPSILON_REL: f64 = 0.02;
 
+/// Largest speed of a body's points in a scene file (length per second): its centre's speed
+/// and its angular speed times its extent. A body spinning at 1e30 rad/s makes every
+/// time-of-impact bound 1e-31 s long and the event loop crawl for ever; no rigid body moves
+/// this fast in any unit system (1e8 m/s is a third of the speed of light). Default `1e8`.
+pub const MAX_SPEED: f64 = 1e8;
+
 /// Default collision epsilon of a scene that gives none (length). Default `1e-4`.
 pub const DEFAULT_COLLISION_EPSILON: f64 = 1e-4;
 
@@ -554,6 +560,20 @@ impl BodyDesc {
         finite3(&b.position).map_err(|p| bad("position", p))?;
         finite3(&b.velocity).map_err(|p| bad("velocity", p))?;
         finite3(&b.angular_velocity).map_err(|p| bad("angular_velocity", p))?;
+        let speed = norm3(&b.velocity);
+        if speed > MAX_SPEED {
+            return Err(bad(
+                "velocity",
+                format!("speed {speed:e} is above {MAX_SPEED:e} (MAX_SPEED)"),
+            ));
+        }
+        let rim = norm3(&b.angular_velocity) * shape_extent(&b.shape);
+        if rim > MAX_SPEED {
+            return Err(bad(
+                "angular_velocity",
+                format!("turns its farthest point at {rim:e}, above {MAX_SPEED:e} (MAX_SPEED)"),
+            ));
+        }
         check_rotation(&b.rotation).map_err(|p| bad("rotation", p))?;
         check_shape(&b.shape, true).map_err(|(f, p)| bad(&format!("shape.{f}"), p))?;
         match b.mass {
@@ -763,6 +783,10 @@ fn non_negative(x: f64) -> Result<(), String> {
     } else {
         Err(format!("{x} must be finite and ≥ 0"))
     }
+}
+
+fn norm3(v: &[f64; 3]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 pub(crate) fn finite3(v: &[f64; 3]) -> Result<(), String> {
