@@ -447,6 +447,25 @@ pub fn fig7(
     samples: &[f64],
     settings: &Fig7Options,
 ) -> Result<(Vec<Fig7Row>, Vec<f64>), Error> {
+    let models = sample_models(m, ee, direction, samples, settings)?;
+    fig7_with_models(m, ee, direction, loads, samples, models, settings)
+}
+
+/// [`fig7`] with the set's models given: `models` as [`sample_models`] returns them for the
+/// same `m`, `ee`, `direction`, `samples` and `settings` (the tests build them once for
+/// several sweeps).
+///
+/// # Errors
+/// Errors of the statics or the blending.
+pub fn fig7_with_models(
+    m: &Mechanism,
+    ee: usize,
+    direction: DVec3,
+    loads: &[f64],
+    samples: &[f64],
+    models: Vec<ReducedModel>,
+    settings: &Fig7Options,
+) -> Result<(Vec<Fig7Row>, Vec<f64>), Error> {
     let statics = settings.statics;
     let link = m.end_effectors[ee];
     let load_of = |s: f64| Load {
@@ -454,7 +473,6 @@ pub fn fig7(
         force: direction * s,
         torque: DVec3::ZERO,
     };
-    let models = sample_models(m, ee, direction, samples, settings)?;
     let rest_ee: Vec<Pose> = m.end_effectors.iter().map(|&e| m.links[e].rest).collect();
     let r = m.bounding_radius();
     let single = BlendedModel::new(vec![models[0].clone()], rest_ee.clone(), r)?;

@@ -1,6 +1,8 @@
 //! Fig. 7 study: the statics against the closed-form lever (`testutil::lever`); the "Y" and
 //! the ladder against the paper's band and issue 14's acceptance for the blend.
 
+use std::sync::OnceLock;
+
 use glam::DVec3;
 
 use super::*;
@@ -58,6 +60,53 @@ const LADDER_SAMPLES: usize = 9;
 /// passes 1 (at ~155 N).
 const LADDER_TAIL: [f64; 6] = [110.0, 120.0, 130.0, 140.0, 150.0, 160.0];
 
+/// The settings of both sweeps of a study: the study's exponent and support, the full
+/// statics in four load increments stopping at `tolerance`.
+fn study_settings(tolerance: f64) -> Fig7Options {
+    Fig7Options {
+        statics: StaticOptions {
+            load_steps: 4,
+            tolerance,
+            ..StaticOptions::default()
+        },
+        ..Fig7Options::default()
+    }
+}
+
+/// A study's models, as [`sample_models`] builds them for the first end effector: what they
+/// were built from, and the models.
+type StudyModels = ((DVec3, Vec<f64>, Fig7Options), Vec<ReducedModel>);
+
+/// The models of study `name` ("y" or "ladder-36"), built once per test binary: the Fig. 7
+/// sweep and the between-samples sweep of a mechanism use the same set (same mechanism,
+/// direction, samples and settings; building them is most of the ladder's Fig. 7 sweep).
+/// Panics if asked for the same study with other inputs.
+fn study_models(
+    name: &str,
+    m: &Mechanism,
+    direction: DVec3,
+    samples: &[f64],
+    settings: &Fig7Options,
+) -> &'static [ReducedModel] {
+    static Y: OnceLock<StudyModels> = OnceLock::new();
+    static LADDER: OnceLock<StudyModels> = OnceLock::new();
+    let cell = match name {
+        "y" => &Y,
+        "ladder-36" => &LADDER,
+        _ => panic!("no shared models for study {name}"),
+    };
+    let key = (direction, samples.to_vec(), *settings);
+    let (built_from, models) = cell.get_or_init(|| {
+        let models = sample_models(m, 0, direction, samples, settings).unwrap();
+        (key.clone(), models)
+    });
+    assert_eq!(
+        built_from, &key,
+        "{name}: shared models built from other inputs"
+    );
+    models
+}
+
 /// Runs a Fig. 7 sweep of `m` (force along `direction` on the first end effector) with samples
 /// `first · FIG7_SAMPLE_RATIOᵏ` and the study's exponent, on the subdivided sample spans (the
 /// first finer) and `tail`; checks issue 14's acceptance and returns the rows.
@@ -76,15 +125,9 @@ fn check_fig7(
     loads.extend_from_slice(tail);
     loads.sort_by(f64::total_cmp);
     loads.dedup();
-    let settings = Fig7Options {
-        statics: StaticOptions {
-            load_steps: 4,
-            tolerance,
-            ..StaticOptions::default()
-        },
-        ..Fig7Options::default()
-    };
-    let (rows, _) = fig7(m, 0, direction, &loads, &samples, &settings).unwrap();
+    let settings = study_settings(tolerance);
+    let models = study_models(name, m, direction, &samples, &settings).to_vec();
+    let (rows, _) = fig7_with_models(m, 0, direction, &loads, &samples, models, &settings).unwrap();
     for r in &rows {
         println!(
             "{name} {:8.3} N: displacement {:.4} (single {:.4}), single {:.4e}, blended {:.4e}, ratio {:.4}",
@@ -242,18 +285,10 @@ fn check_between_samples(
     direction: DVec3,
     (first, count): (f64, usize),
     tolerance: f64,
-    settings: Fig7Options,
 ) -> Between {
-    let settings = Fig7Options {
-        statics: StaticOptions {
-            load_steps: 4,
-            tolerance,
-            ..StaticOptions::default()
-        },
-        ..settings
-    };
+    let settings = study_settings(tolerance);
     let samples = geometric(first, FIG7_SAMPLE_RATIO, count);
-    let models = sample_models(m, 0, direction, &samples, &settings).unwrap();
+    let models = study_models(name, m, direction, &samples, &settings).to_vec();
     let rest: Vec<Pose> = m.end_effectors.iter().map(|&e| m.links[e].rest).collect();
     let r = m.bounding_radius();
     let mut set = BlendedModel::new(models.clone(), rest.clone(), r).unwrap();
@@ -330,47 +365,40 @@ fn check_between_samples(
     worst
 }
 
-/// The between-samples sweep of the "Y" and the ladder-36 with the study's settings, run once
-/// for the tests that read it.
-fn between_samples() -> &'static [(&'static str, Between)] {
-    static SWEEP: std::sync::OnceLock<Vec<(&'static str, Between)>> = std::sync::OnceLock::new();
-    SWEEP.get_or_init(|| {
-        let cases = [
-            (
-                "y",
-                crate::scenes::y_shape(4).build().unwrap(),
+/// The between-samples sweep of study `name` ("y" or "ladder-36") with the study's settings,
+/// run once per test binary for the two tests that read it. One cell per mechanism, and the
+/// two tests ask for them in opposite orders: run side by side, each computes one sweep
+/// instead of one computing both while the other waits.
+fn between_samples(name: &'static str) -> (&'static str, Between) {
+    static Y: OnceLock<Between> = OnceLock::new();
+    static LADDER: OnceLock<Between> = OnceLock::new();
+    let worst = match name {
+        "y" => Y.get_or_init(|| {
+            check_between_samples(
+                name,
+                &crate::scenes::y_shape(4).build().unwrap(),
                 DVec3::X,
                 (Y_FIRST_SAMPLE, Y_SAMPLES),
                 crate::tol::STATIC_RESIDUAL_REL,
-            ),
-            (
-                "ladder-36",
-                crate::scenes::ladder(36).build().unwrap(),
+            )
+        }),
+        "ladder-36" => LADDER.get_or_init(|| {
+            check_between_samples(
+                name,
+                &crate::scenes::ladder(36).build().unwrap(),
                 DVec3::Y,
                 (LADDER_FIRST_SAMPLE, LADDER_SAMPLES),
                 LADDER_STATIC_TOLERANCE,
-            ),
-        ];
-        cases
-            .into_iter()
-            .map(|(name, m, direction, samples, tolerance)| {
-                let worst = check_between_samples(
-                    name,
-                    &m,
-                    direction,
-                    samples,
-                    tolerance,
-                    Fig7Options::default(),
-                );
-                (name, worst)
-            })
-            .collect()
-    })
+            )
+        }),
+        _ => panic!("no between-samples sweep for study {name}"),
+    };
+    (name, *worst)
 }
 
 #[test]
 fn fig7_blend_between_samples_is_within_twice_the_neighbours_against_the_full_solution() {
-    for (name, worst) in between_samples() {
+    for (name, worst) in ["y", "ladder-36"].map(between_samples) {
         assert!(
             worst.mid_constraint <= MIDPOINT_NEIGHBOUR_FACTOR,
             "{name}: midpoint constraint {}",
@@ -393,8 +421,9 @@ fn fig7_blend_between_samples_is_within_twice_the_neighbours_against_the_full_so
 fn fig7_blend_places_internal_links_mid_way_within_twice_the_neighbours_and_exactly_at_samples() {
     // Every link (internal links and end effectors) against the full static solution: at the
     // samples the blend is that sample's model, mid-way it may be at most
-    // MIDPOINT_NEIGHBOUR_FACTOR times the worse neighbouring model alone.
-    for (name, worst) in between_samples() {
+    // MIDPOINT_NEIGHBOUR_FACTOR times the worse neighbouring model alone. (The other order
+    // than the test above: see `between_samples`.)
+    for (name, worst) in ["ladder-36", "y"].map(between_samples) {
         assert!(
             worst.sample_links <= LINKS_AT_SAMPLE,
             "{name}: link pose error at a sample {}",

@@ -103,9 +103,7 @@ pub fn body_jacobian(m: &Mechanism, q: &Configuration, poses: &[Pose], l: usize)
         let th = &q.theta[j.offset..j.offset + j.dof()];
         for (c, s) in joint_jacobian(j, th).iter().enumerate() {
             let col = to_l.transform_twist(s).to_array();
-            for (r, x) in col.iter().enumerate() {
-                jac[(r, j.offset + c)] = *x;
-            }
+            jac.col_as_slice_mut(j.offset + c).copy_from_slice(&col);
         }
         k = j.parent;
     }
@@ -138,7 +136,13 @@ pub fn loop_jacobian(m: &Mechanism, q: &Configuration, poses: &[Pose], ji: usize
     // Express both in the frame `a` (equal to `b` where closed).
     let ad_c = (a.inverse() * poses[j.child]).adjoint();
     let ad_p = (a.inverse() * poses[j.parent]).adjoint();
-    let mut g = mat6_times(&ad_c, &jc) - mat6_times(&ad_p, &jp);
+    let mut g = mat6_times(&ad_c, &jc);
+    let gp = mat6_times(&ad_p, &jp);
+    for c in 0..g.ncols() {
+        for (x, &y) in g.col_as_slice_mut(c).iter_mut().zip(gp.col_as_slice(c)) {
+            *x -= y;
+        }
+    }
     let _ = b;
     for (c, s) in joint_jacobian(j, th).iter().enumerate() {
         let col = s.to_array();
@@ -152,8 +156,36 @@ pub fn loop_jacobian(m: &Mechanism, q: &Configuration, poses: &[Pose], ji: usize
 /// `a · b` for a 6×6 `a` and a 6×n faer matrix `b`.
 #[must_use]
 pub fn mat6_times(a: &Mat6, b: &Mat<f64>) -> Mat<f64> {
+    // Column by column through slices: the same products and sums as indexing element by
+    // element, without faer's per-element index calls (not inlined in the test profile, where
+    // they were most of the full statics' time).
+    // A column of +0.0 (a body Jacobian is zero off the link's path to the base) gives, as
+    // the sum below would, -0.0 in row r when every a[r][k] has its sign bit set and +0.0
+    // otherwise (for a finite `a`): copied rather than computed, bit for bit the same.
     let rows = a.to_rows();
-    Mat::from_fn(6, b.ncols(), |r, c| {
-        (0..6).map(|k| rows[r][k] * b[(k, c)]).sum()
-    })
+    let finite = rows.iter().flatten().all(|x| x.is_finite());
+    let zero_image = rows.map(|row| {
+        if row.iter().all(|x| x.is_sign_negative()) {
+            -0.0
+        } else {
+            0.0
+        }
+    });
+    let mut out = Mat::<f64>::zeros(6, b.ncols());
+    for c in 0..b.ncols() {
+        let col = b.col_as_slice(c);
+        if finite && col.iter().all(|x| x.to_bits() == 0) {
+            out.col_as_slice_mut(c).copy_from_slice(&zero_image);
+            continue;
+        }
+        for (x, row) in out.col_as_slice_mut(c).iter_mut().zip(&rows) {
+            // As `Iterator::sum` for f64: from -0.0, in order.
+            let mut acc = -0.0;
+            for (a, b) in row.iter().zip(col) {
+                acc += a * b;
+            }
+            *x = acc;
+        }
+    }
+    out
 }
