@@ -64,6 +64,10 @@ enum Command {
         /// contact an impulse, the thesis's pure model).
         #[arg(long, value_enum)]
         contact_model: Option<run::ContactModelArg>,
+        /// Print where the wall time went: multibody dynamics, rigid bodies, collision
+        /// detection, collision response, sustained contact (thesis Table 7.2).
+        #[arg(long)]
+        profile: bool,
     },
     /// Exact mass properties of a closed polygon mesh (Wavefront OBJ), printed as JSON.
     ///
@@ -169,6 +173,7 @@ fn main() -> ExitCode {
             plot,
             threads,
             contact_model,
+            profile,
         } => run::run(&run::RunArgs {
             scene,
             until: *until,
@@ -176,6 +181,7 @@ fn main() -> ExitCode {
             plot: plot.as_deref(),
             threads: *threads,
             contact_model: *contact_model,
+            profile: *profile,
         }),
         Command::Massprops {
             mesh,

@@ -32,6 +32,8 @@ pub struct RunArgs<'a> {
     pub threads: Option<usize>,
     /// Contact model overriding the scene's.
     pub contact_model: Option<ContactModelArg>,
+    /// Print the wall-time profile of the loop's parts.
+    pub profile: bool,
 }
 
 /// The contact model named on the command line.
@@ -80,6 +82,7 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         }
         world.set_threads(n).map_err(|e| e.to_string())?;
     }
+    world.set_profiling(args.profile);
     let start = Instant::now();
     let terminal = std::io::stderr().is_terminal();
     let (mut shown, mut last_line) = (false, 0.0);
@@ -123,7 +126,31 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         std::fs::write(&paths, paths_plot(&rec, &world))
             .map_err(|e| format!("cannot write {}: {e}", paths.display()))?;
     }
-    Ok(summary(&scene, &rec, until))
+    let mut text = summary(&scene, &rec, until);
+    if let Some(p) = world.profile() {
+        text.push_str(&profile_text(&p, &world));
+    }
+    Ok(text)
+}
+
+/// The profile as lines of the summary: each part's share of the loop's wall time (thesis
+/// Table 7.2), and the multibodies' redone steps.
+fn profile_text(p: &impulse_sim::Profile, world: &World) -> String {
+    let mut text = format!(
+        "\nprofile:          {:.3} s in the event loop\n",
+        p.total.as_secs_f64()
+    );
+    for (name, share) in p.shares() {
+        text.push_str(&format!("  {name:<28} {:5.1} %\n", 100.0 * share));
+    }
+    let c = world.counters();
+    if !world.multibody_handles().is_empty() {
+        text.push_str(&format!(
+            "  multibody steps redone:      {} ({} box, {} slack violations; {} link contacts)\n",
+            c.rollbacks, c.box_violations, c.slack_violations, c.link_contacts
+        ));
+    }
+    text
 }
 
 enum Format {

@@ -329,3 +329,37 @@ fn contact_model_option_overrides_the_scene() {
         "{stderr}"
     );
 }
+
+/// `--profile` on the bundled triple pendulum (its first second, pure impulse model): the
+/// shares of the loop's parts are printed and add up to 100 %, and, as thesis Table 7.2 finds
+/// for this scene, multibody dynamics is the largest part.
+#[test]
+fn profile_prints_shares_that_add_up() {
+    let scene = scenes().join("triple-pendulum.ron");
+    let (ok, stdout, stderr) = impulse(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--until",
+        "1",
+        "--contact-model",
+        "impulse",
+        "--profile",
+    ]);
+    assert!(ok, "{stderr}");
+    let parse = |line: &str| -> Option<(String, f64)> {
+        let t = line.trim().strip_suffix('%')?.trim_end();
+        let (name, pct) = t.rsplit_once(' ')?;
+        Some((name.trim().to_owned(), pct.parse().ok()?))
+    };
+    let shares: Vec<(String, f64)> = stdout
+        .lines()
+        .skip_while(|l| !l.starts_with("profile:"))
+        .filter_map(parse)
+        .collect();
+    assert_eq!(shares.len(), 6, "{stdout}");
+    let total: f64 = shares.iter().map(|(_, p)| p).sum();
+    assert!((total - 100.0).abs() < 0.5, "{shares:?}");
+    let top = shares.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+    assert_eq!(top.0, "multibody dynamics", "{stdout}");
+    assert!(stdout.contains("multibody steps redone"), "{stdout}");
+}

@@ -66,7 +66,7 @@ pub use scene::{Scene, SceneDesc};
 pub use sustained::{ContactMode, SustainedSettings};
 pub use world::{
     BodyHandle, BodyState, ContactEvent, ContactFailure, Counters, LinkShape, Load, LoadFn,
-    Material, MultibodyHandle, StepReport, World, WorldSettings,
+    Material, MultibodyHandle, Profile, StepReport, World, WorldSettings,
 };
 
 #[cfg(test)]

@@ -491,7 +491,14 @@ impl World {
     /// i) and distance `d`: the response of `impulse-response`, or, when it fails or its
     /// result is not finite, the fallback (a frictionless Newton impulse along the normal),
     /// reported. Returns whether an impulse was applied.
-    fn resolve(&mut self, (i, j): (u32, u32), x: DVec3, n: DVec3, d: f64) -> bool {
+    fn resolve(&mut self, pair: (u32, u32), x: DVec3, n: DVec3, d: f64) -> bool {
+        let start = self.tick();
+        let hit = self.resolve_timed(pair, x, n, d);
+        self.charge(super::profile::Part::Response, start);
+        hit
+    }
+
+    fn resolve_timed(&mut self, (i, j): (u32, u32), x: DVec3, n: DVec3, d: f64) -> bool {
         if self.b(i).is_link() || self.b(j).is_link() {
             return self.resolve_link((i, j), x, n, d);
         }

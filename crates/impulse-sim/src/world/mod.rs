@@ -48,6 +48,7 @@ mod hybrid_step;
 mod island;
 mod materials;
 mod patch;
+mod profile;
 mod step;
 
 use std::path::PathBuf;
@@ -63,6 +64,7 @@ pub use api::{Load, LoadFn};
 pub use hybrid::{LinkShape, MultibodyHandle};
 pub use hybrid_step::{MAX_STEP_REDOS, SLACK_ROUNDING_REL};
 pub use materials::Material;
+pub use profile::Profile;
 
 use crate::body::{Body, Integrator};
 use crate::contact::{ContactKind, ContactModel};
@@ -431,6 +433,8 @@ pub struct World {
     multibodies: Vec<hybrid::Member>,
     /// The span the moving bodies' swept boxes were made for in the current step (s).
     box_span: f64,
+    /// Wall-time profile of the loop's parts, when on ([`World::set_profiling`]).
+    profile: Option<Profile>,
     #[cfg(test)]
     pub(crate) faults: Faults,
 }
@@ -522,6 +526,7 @@ impl World {
             islands: island::Islands::new(settings.contact_mode, settings.sustained),
             multibodies: Vec::new(),
             box_span: 0.0,
+            profile: None,
             #[cfg(test)]
             faults: Faults::default(),
         })

@@ -5,6 +5,7 @@ use impulse_broadphase::BroadphaseError;
 use impulse_collide::Motion;
 use rayon::prelude::*;
 
+use super::profile::Part;
 use super::{Counters, MAX_CHECKS_WITHOUT_PROGRESS, MAX_STALLS_PER_INSTANT, StepReport, World};
 use crate::body::{Body, BodyKind};
 use crate::error::SimError;
@@ -159,6 +160,13 @@ impl World {
     /// One step of the `advance` algorithm (module documentation of [`super`]), ending no
     /// later than `limit`.
     fn loop_step(&mut self, limit: f64) -> Result<(), SimError> {
+        let started = self.tick();
+        let result = self.loop_step_inner(limit);
+        self.charge_total(started);
+        result
+    }
+
+    fn loop_step_inner(&mut self, limit: f64) -> Result<(), SimError> {
         let t0 = self.time;
         let mut t_end = self
             .heap
@@ -187,6 +195,7 @@ impl World {
             moving.push((i as u32, motion, b.r_max + eps));
         }
         // 2. Swept boxes; halve the step while a box would cover too many tiles.
+        let detecting = self.tick();
         let mut failed = None;
         'boxes: loop {
             for &(i, motion, grow) in &moving {
@@ -211,16 +220,21 @@ impl World {
             return Err(self.runtime(format!("broad phase, body {}: {e}", self.name(i))));
         }
         self.promote_new_pairs()?;
+        self.charge(Part::Detection, detecting);
         if let Some((_, k)) = self.heap.peek() {
             t_end = t_end.min(k);
         }
         t_end = t_end.max(t0);
         // 3. Dynamic evolution: the multibodies first, since checking their predictions may
         // bring the end of the step earlier (thesis §5.2); then every other body.
+        let integrating = self.tick();
         self.advance_multibodies(t0, &mut t_end)?;
+        self.charge(Part::Multibody, integrating);
         let dt = t_end - t0;
         if dt > 0.0 {
+            let moving = self.tick();
             self.advance_bodies(dt)?;
+            self.charge(Part::Rigid, moving);
             self.stalled_checks = 0;
             self.stalls = 0;
         }
@@ -237,7 +251,9 @@ impl World {
         // each island takes one solve instead of one per pair.
         let pair_due = self.heap.peek().is_some_and(|(_, key)| key <= self.time);
         if self.islands.next_step <= self.time && !pair_due {
+            let stepping = self.tick();
             self.island_step()?;
+            self.charge(Part::Islands, stepping);
         }
         // 4. Check the top pair if it is due.
         if let Some((pair, key)) = self.heap.peek() {
@@ -255,7 +271,13 @@ impl World {
                     }
                     self.break_stall(pair)?;
                 } else {
+                    let responded = self.profile.map(|p| p.response);
+                    let checking = self.tick();
                     self.check_top(pair)?;
+                    // The check's time less the response's within it.
+                    if let (Some(p), Some(s), Some(r0)) = (&mut self.profile, checking, responded) {
+                        p.detection += s.elapsed().saturating_sub(p.response - r0);
+                    }
                 }
             }
         }
