@@ -31,6 +31,7 @@
 
 use std::path::{Path, PathBuf};
 
+use glam::DVec3;
 use rustc_hash::FxHashSet;
 use serde::{Deserialize, Serialize};
 
@@ -525,7 +526,9 @@ impl SceneDesc {
                 ),
             ));
         }
-        if !self.bodies.iter().any(|b| b.motion == MotionDesc::Dynamic) {
+        if self.multibodies.is_empty()
+            && !self.bodies.iter().any(|b| b.motion == MotionDesc::Dynamic)
+        {
             return Err(scene(
                 "bodies",
                 "no body is dynamic: nothing would move".into(),
@@ -683,6 +686,9 @@ impl SceneDesc {
                     100.0 * self.collision_epsilon / size
                 ));
             }
+        }
+        for m in &self.multibodies {
+            out.extend(m.warnings(DVec3::from_array(self.gravity)));
         }
         out
     }

@@ -413,6 +413,57 @@ impl MultibodyDesc {
     }
 }
 
+/// A joint controller's velocity loop updated every T seconds with zero-order hold is unstable
+/// when `k_v·T / M_jj ≥ 2` (M_jj the joint's effective inertia, the diagonal of the joint-space
+/// mass matrix): each update overcorrects the rate by more than its error. Warned at this
+/// fraction of that limit. Default `0.5`.
+pub const CONTROL_STABILITY_WARN: f64 = 0.5;
+
+impl MultibodyDesc {
+    /// Warnings about a multibody that builds but may misbehave: a controller whose
+    /// velocity gain, at its rate, is near or past the stability limit of a zero-order-held
+    /// loop on its joint's effective inertia at the initial pose (thesis §5.4: controllers at
+    /// finite rates). Nothing for a multibody that does not build (its error says why).
+    #[must_use]
+    pub fn warnings(&self, gravity: DVec3) -> Vec<String> {
+        let Ok((sim, _)) = self.build(gravity, Path::new(".")) else {
+            return Vec::new();
+        };
+        let model = sim.model();
+        let n = model.nv();
+        let mut m = impulse_multibody::Mat::<f64>::zeros(n, n);
+        let mut ws = impulse_multibody::Workspace::new(model);
+        if impulse_multibody::mass_matrix(model, &mut ws, sim.q(), &mut m).is_err() {
+            return Vec::new();
+        }
+        let vo = model.base_dofs();
+        let mut out = Vec::new();
+        for c in &self.controllers {
+            let (joint, kv, rate) = match c {
+                ControllerDesc::Pd {
+                    joint, kv, rate, ..
+                }
+                | ControllerDesc::Pid {
+                    joint, kv, rate, ..
+                } => (joint, *kv, *rate),
+            };
+            let Some(j) = model.joint_index(joint) else {
+                continue;
+            };
+            let inertia = m[(vo + j, vo + j)];
+            let ratio = kv / rate / inertia;
+            if ratio >= 2.0 * CONTROL_STABILITY_WARN {
+                out.push(format!(
+                    "multibody \"{}\", controller on joint \"{joint}\": k_v/rate/M = {kv}/{rate}/{inertia:.3e} = {ratio:.2} ({}; a zero-order-held velocity loop is unstable from 2): raise its rate or lower k_v",
+                    self.name,
+                    if ratio >= 2.0 { "unstable" } else { "near the limit" }
+                ));
+            }
+        }
+        out
+    }
+}
+
 /// A link's spatial inertia (link frame) and collision shape (link frame), from its shape and
 /// mass or its explicit inertia; `(field, problem)` on error.
 fn link_mass(
@@ -494,3 +545,6 @@ fn link_mass(
     };
     Ok((inertia, placed))
 }
+
+#[cfg(test)]
+mod tests;
