@@ -47,15 +47,14 @@ pub struct TravelSample {
 
 impl TravelSample {
     /// The largest speed along `d` of any point within `reach` of the origin at this state:
-    /// `v·d + r Σ_c |ω_c| ‖e_c × d‖` (the per-instant form of Fig. 5.4's k).
+    /// `v·d + r ‖ω × d‖` (the largest `(ω × arm)·d = arm·(d × ω)` over arms of length r). Exact
+    /// for one state, and never above the prediction's `v·d + r ‖ω‖ ‖d‖`; Fig. 5.4's
+    /// componentwise form ([`LinkTravel::speed_along`]) is for ω known only by per-axis
+    /// bounds, and exceeds ‖ω‖ for a turn about a skew axis (by up to √2 per sample: it made
+    /// a triple pendulum's links fail their slack at rest).
     #[must_use]
     pub fn speed_along(&self, d: DVec3, reach: f64) -> f64 {
-        let dd = d.length_squared();
-        let mut k = self.velocity.dot(d);
-        for c in 0..3 {
-            k += reach * self.omega[c].abs() * (dd - d[c] * d[c]).max(0.0).sqrt();
-        }
-        k
+        self.velocity.dot(d) + reach * self.omega.cross(d).length()
     }
 }
 

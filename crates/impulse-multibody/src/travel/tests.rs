@@ -138,3 +138,31 @@ fn a_copied_simulation_with_controllers_runs_the_same_trajectory() {
     sim.run_until(0.6).unwrap();
     assert_ne!(sim.q(), copy.q());
 }
+
+/// A sample's speed bound is exact: the largest `(v + ω × arm)·d` over arms of length r,
+/// found by brute force over many arms, reaches it (to the sampling) and never exceeds it.
+#[test]
+fn a_samples_speed_bound_is_the_largest_point_speed() {
+    let mut r = rng(44);
+    for _ in 0..200 {
+        let s = crate::TravelSample {
+            t: 0.0,
+            origin: DVec3::ZERO,
+            velocity: unit(&mut r) * r.random_range(0.0..3.0),
+            omega: unit(&mut r) * r.random_range(0.0..20.0),
+        };
+        let d = unit(&mut r);
+        let reach = r.random_range(0.0..1.0);
+        let bound = s.speed_along(d, reach);
+        let mut best = f64::NEG_INFINITY;
+        for _ in 0..4000 {
+            let arm = unit(&mut r) * reach;
+            best = best.max((s.velocity + s.omega.cross(arm)).dot(d));
+        }
+        assert!(best <= bound + 1e-12);
+        assert!(
+            best >= bound - 0.02 * (1.0 + s.omega.length() * reach),
+            "{best} vs {bound}"
+        );
+    }
+}
