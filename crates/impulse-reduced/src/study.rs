@@ -569,6 +569,9 @@ pub struct SetErrors {
     pub links: f64,
     /// The same over the end effectors only.
     pub end_effectors: f64,
+    /// The same over the internal links only (placed by Algorithm 4, the blended model's
+    /// eq. 22), without the end effectors that dominate [`SetErrors::links`].
+    pub internal: f64,
 }
 
 /// Static solution of `set` under a world force along `direction` of magnitude `load` on end
@@ -604,6 +607,11 @@ pub fn set_errors(
                 .end_effectors
                 .iter()
                 .map(|&e| error(e))
+                .fold(0.0, f64::max),
+            internal: set.models[0]
+                .internal
+                .iter()
+                .map(|&l| error(l))
                 .fold(0.0, f64::max),
         },
         poses,
