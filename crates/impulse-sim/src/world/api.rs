@@ -147,21 +147,27 @@ impl World {
             .and_then(|()| self.promote_new_pairs())
         {
             for &i in &ids {
-                let slot = &mut self.slots[i as usize];
-                if let Some(body) = slot.body.take() {
-                    self.names.remove(&body.name);
-                }
-                slot.generation += 1;
-                self.free.push(i);
-                for p in self.heap.pairs_of(i).collect::<Vec<_>>() {
-                    self.heap.remove(p);
-                }
-                self.pairs.retain(|&(a, b), _| a != i && b != i);
+                self.unregister(i);
             }
             (self.materials, self.hash) = old;
             return Err(e);
         }
         Ok(ids.iter().map(|&i| self.handle_of(i)).collect())
+    }
+
+    /// Takes body `i` out of the body table, the heap and the pair table (a body just
+    /// inserted whose addition failed).
+    pub(super) fn unregister(&mut self, i: u32) {
+        let slot = &mut self.slots[i as usize];
+        if let Some(body) = slot.body.take() {
+            self.names.remove(&body.name);
+        }
+        slot.generation += 1;
+        self.free.push(i);
+        for p in self.heap.pairs_of(i).collect::<Vec<_>>() {
+            self.heap.remove(p);
+        }
+        self.pairs.retain(|&(a, b), _| a != i && b != i);
     }
 
     /// Refuses new bodies that overlap one another or a body of the world by more than ε_c.

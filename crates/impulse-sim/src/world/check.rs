@@ -5,7 +5,7 @@ use glam::DVec3;
 use impulse_collide::schedule::{Mover, free_coefficients};
 use impulse_collide::{Closest, Convex, FeaturePair, Motion, depth, manifold, patch, shape};
 
-use super::{BodyHandle, ContactEvent, ContactFailure, MAX_FAILURES_KEPT, Material, World};
+use super::{ContactEvent, ContactFailure, MAX_FAILURES_KEPT, Material, World};
 use crate::contact::{self, ContactKind};
 use crate::error::SimError;
 
@@ -553,22 +553,44 @@ impl World {
                     ),
                     None => format!("{why}; no impulse applied (the bodies are not approaching)"),
                 };
-                self.counters.unresolved += 1;
-                if self.failures.len() < MAX_FAILURES_KEPT {
-                    let (a, b) = (self.handle_of(i), self.handle_of(j));
-                    self.failures.push(ContactFailure {
-                        time: self.time,
-                        a,
-                        b,
-                        message,
-                    });
-                }
+                self.unresolved(i, j, message);
                 match p {
                     Some(p) => (ContactKind::Fallback, p),
                     None => return false,
                 }
             }
         };
+        self.record_contact((i, j), kind, impulse, x, n, before);
+        true
+    }
+
+    /// Counts an unresolved contact of `(i, j)` ([`super::Counters::unresolved`]) and keeps its
+    /// message among the first [`MAX_FAILURES_KEPT`].
+    pub(super) fn unresolved(&mut self, i: u32, j: u32, message: String) {
+        self.counters.unresolved += 1;
+        if self.failures.len() < MAX_FAILURES_KEPT {
+            let (a, b) = (self.handle_of(i), self.handle_of(j));
+            self.failures.push(ContactFailure {
+                time: self.time,
+                a,
+                b,
+                message,
+            });
+        }
+    }
+
+    /// Counts a contact of `(i, j)` just resolved with `impulse` (on `i`, world) at `x` along
+    /// `n`, and logs its event; `before` is the two sides' kinetic energy and linear momentum
+    /// before the impulse (a link's side is its whole multibody).
+    pub(super) fn record_contact(
+        &mut self,
+        (i, j): (u32, u32),
+        kind: ContactKind,
+        impulse: DVec3,
+        x: DVec3,
+        n: DVec3,
+        before: (f64, DVec3),
+    ) {
         match kind {
             ContactKind::Collision => self.counters.collisions += 1,
             ContactKind::Microcollision => self.counters.microcollisions += 1,
@@ -578,7 +600,7 @@ impl World {
             }
             ContactKind::Fallback => {}
         }
-        let (bi, bj) = (self.b(i), self.b(j));
+        let after = self.pair_energy(i, j);
         let event = ContactEvent {
             time: self.time,
             a: self.handle_of(i),
@@ -588,15 +610,14 @@ impl World {
             point: x,
             normal: n,
             energy_before: before.0,
-            energy_after: bi.kinetic_energy() + bj.kinetic_energy(),
+            energy_after: after.0,
             momentum_before: before.1,
-            momentum_after: bi.linear_momentum() + bj.linear_momentum(),
+            momentum_after: after.1,
         };
         if let Some(log) = &mut self.events {
             log.push(event);
         }
         self.recent.push(event);
-        true
     }
 
     /// A pair checked [`super::MAX_CHECKS_WITHOUT_PROGRESS`] times without time advancing:
@@ -621,16 +642,7 @@ impl World {
             }
             None => "the loop stalled on this pair with no contact normal".to_string(),
         };
-        self.counters.unresolved += 1;
-        if self.failures.len() < MAX_FAILURES_KEPT {
-            let (a, b): (BodyHandle, BodyHandle) = (self.handle_of(i), self.handle_of(j));
-            self.failures.push(ContactFailure {
-                time: self.time,
-                a,
-                b,
-                message,
-            });
-        }
+        self.unresolved(i, j, message);
         self.rekey_others(pair)?;
         self.check_top(pair)
     }

@@ -249,6 +249,19 @@ impl World {
             .sim
             .link_kinematics()
             .map_err(|e| self.runtime(format!("multibody {}: {e}", self.multibodies[m].name)))?;
+        self.place_links(m, &kin)
+    }
+
+    /// Puts every shaped link of multibody `m` where `kin` (its links' kinematics now, in
+    /// link order) says, with a fresh prediction of its motion.
+    ///
+    /// # Errors
+    /// [`SimError::Runtime`] when a prediction cannot be made (not finite).
+    pub(crate) fn place_links(
+        &mut self,
+        m: usize,
+        kin: &[impulse_multibody::LinkKinematics],
+    ) -> Result<(), SimError> {
         for k in 0..self.multibodies[m].links.len() {
             let (id, slot) = self.multibodies[m].links[k];
             let lk = kin[id.index()];
@@ -271,21 +284,6 @@ impl World {
     /// The slots of every shaped link of multibody `m`.
     pub(crate) fn link_slots(&self, m: usize) -> Vec<u32> {
         self.multibodies[m].links.iter().map(|&(_, i)| i).collect()
-    }
-
-    /// Takes body `i` out of the body table, the heap and the pair table (a body just
-    /// inserted whose addition failed).
-    fn unregister(&mut self, i: u32) {
-        let slot = &mut self.slots[i as usize];
-        if let Some(body) = slot.body.take() {
-            self.names.remove(&body.name);
-        }
-        slot.generation += 1;
-        self.free.push(i);
-        for p in self.heap.pairs_of(i).collect::<Vec<_>>() {
-            self.heap.remove(p);
-        }
-        self.pairs.retain(|&(a, b), _| a != i && b != i);
     }
 
     /// Refuses a change to a link's body through the rigid-body API: a link moves with its

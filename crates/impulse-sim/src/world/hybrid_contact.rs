@@ -7,7 +7,7 @@ use glam::DVec3;
 use impulse_multibody::{Simulation, Workspace};
 use impulse_response::{MicrocollisionParams, ResponseKind, Settings};
 
-use super::{ContactEvent, ContactFailure, MAX_FAILURES_KEPT, World};
+use super::{ContactFailure, World};
 use crate::articulated::{Collider, Law, collide_with};
 use crate::body::{Body, BodyKind};
 use crate::contact::{APPROACH_FLOOR_REL, ContactKind};
@@ -22,13 +22,12 @@ fn multibody_energy(sim: &Simulation) -> (f64, DVec3) {
     }
 }
 
-/// One side of a link contact, owned while the collision is resolved.
+/// One side of a link contact, owned while the collision is resolved (a link's model and
+/// configuration are borrowed from the world; only its velocity is copied, to be changed).
 enum Owned {
     Link {
         m: usize,
         link: impulse_multibody::LinkId,
-        model: impulse_multibody::Model,
-        q: Vec<f64>,
         v: Vec<f64>,
     },
     Rigid {
@@ -43,16 +42,17 @@ enum Owned {
 }
 
 impl Owned {
-    fn collider(&mut self) -> Collider<'_> {
+    fn collider<'a>(&'a mut self, world: &'a World) -> Collider<'a> {
         match self {
-            Owned::Link {
-                link, model, q, v, ..
-            } => Collider::Link {
-                model,
-                q,
-                v,
-                link: *link,
-            },
+            Owned::Link { m, link, v } => {
+                let sim = &world.multibodies[*m].sim;
+                Collider::Link {
+                    model: sim.model(),
+                    q: sim.q(),
+                    v,
+                    link: *link,
+                }
+            }
             Owned::Rigid {
                 mass,
                 inertia,
@@ -76,13 +76,10 @@ impl World {
     fn owned_side(&self, i: u32, x: DVec3) -> Owned {
         let b: &Body = self.b(i);
         if let Some((m, link)) = b.link {
-            let sim = &self.multibodies[m as usize].sim;
             return Owned::Link {
                 m: m as usize,
                 link,
-                model: sim.model().clone(),
-                q: sim.q().to_vec(),
-                v: sim.v().to_vec(),
+                v: self.multibodies[m as usize].sim.v().to_vec(),
             };
         }
         match (b.kind, b.mass) {
@@ -100,12 +97,19 @@ impl World {
 
     /// Kinetic energy and linear momentum of what body `i` belongs to (its multibody for a
     /// link).
-    fn side_energy(&self, i: u32) -> (f64, DVec3) {
+    pub(super) fn side_energy(&self, i: u32) -> (f64, DVec3) {
         let b = self.b(i);
         match b.link {
             Some((m, _)) => multibody_energy(&self.multibodies[m as usize].sim),
             None => (b.kinetic_energy(), b.linear_momentum()),
         }
+    }
+
+    /// Kinetic energy and linear momentum of the two sides of a contact together.
+    pub(super) fn pair_energy(&self, i: u32, j: u32) -> (f64, DVec3) {
+        let (ea, pa) = self.side_energy(i);
+        let (eb, pb) = self.side_energy(j);
+        (ea + eb, pa + pb)
     }
 
     /// Resolves a contact of pair `(i, j)`, at least one a link, at `x` with normal `n` (from
@@ -139,13 +143,9 @@ impl World {
                 ..Settings::default()
             },
         };
-        let before = {
-            let (ea, pa) = self.side_energy(i);
-            let (eb, pb) = self.side_energy(j);
-            (ea + eb, pa + pb)
-        };
+        let before = self.pair_energy(i, j);
         let (mut a, mut b) = (self.owned_side(i, x), self.owned_side(j, x));
-        let result = collide_with(&mut a.collider(), &mut b.collider(), x, n, &law);
+        let result = collide_with(&mut a.collider(self), &mut b.collider(self), x, n, &law);
         let collision = match result {
             Ok(c) if c.impulse_world().is_finite() => c,
             failed => {
@@ -153,23 +153,15 @@ impl World {
                     Err(e) => e.to_string(),
                     Ok(_) => "the impulse is not finite".to_string(),
                 };
-                self.counters.unresolved += 1;
-                if self.failures.len() < MAX_FAILURES_KEPT {
-                    let (ha, hb) = (self.handle_of(i), self.handle_of(j));
-                    self.failures.push(ContactFailure {
-                        time: self.time,
-                        a: ha,
-                        b: hb,
-                        message: format!("{message}; no impulse applied"),
-                    });
-                }
+                self.unresolved(i, j, format!("{message}; no impulse applied"));
                 return false;
             }
         };
         for (side, body) in [(a, i), (b, j)] {
             match side {
-                Owned::Link { m, q, v, .. } => {
+                Owned::Link { m, v, .. } => {
                     let name = self.multibodies[m].name.clone();
+                    let q = self.multibodies[m].sim.q().to_vec();
                     if let Err(e) = self.multibodies[m].sim.set_state(&q, &v) {
                         self.failures.push(ContactFailure {
                             time: self.time,
@@ -198,37 +190,8 @@ impl World {
             _ if micro => ContactKind::Microcollision,
             _ => ContactKind::Collision,
         };
-        match kind {
-            ContactKind::Collision => self.counters.collisions += 1,
-            ContactKind::Reversing => {
-                self.counters.microcollisions += 1;
-                self.counters.reversing += 1;
-            }
-            _ => self.counters.microcollisions += 1,
-        }
         self.counters.link_contacts += 1;
-        let after = {
-            let (ea, pa) = self.side_energy(i);
-            let (eb, pb) = self.side_energy(j);
-            (ea + eb, pa + pb)
-        };
-        let event = ContactEvent {
-            time: self.time,
-            a: self.handle_of(i),
-            b: self.handle_of(j),
-            kind,
-            impulse: collision.impulse_world(),
-            point: x,
-            normal: n,
-            energy_before: before.0,
-            energy_after: after.0,
-            momentum_before: before.1,
-            momentum_after: after.1,
-        };
-        if let Some(log) = &mut self.events {
-            log.push(event);
-        }
-        self.recent.push(event);
+        self.record_contact((i, j), kind, collision.impulse_world(), x, n, before);
         true
     }
 }

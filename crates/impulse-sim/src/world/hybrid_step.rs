@@ -97,6 +97,14 @@ impl Slack {
     }
 }
 
+/// One multibody's trial step: its simulation at the step's end, every link's travel over
+/// the step, and its links' kinematics at the end.
+type Trial = (
+    impulse_multibody::Simulation,
+    Vec<LinkTravel>,
+    Vec<impulse_multibody::LinkKinematics>,
+);
+
 /// Fig. 5.4's view of a recorded travel.
 fn seen(t: &LinkTravel) -> SeenSpeeds {
     SeenSpeeds {
@@ -194,12 +202,12 @@ impl World {
                     t.add(t0, b.pose.translation, b.velocity, b.omega);
                     t.path.sort_by(|x, y| x.t.total_cmp(&y.t));
                 }
-                trials.push((sim, travel));
+                trials.push((sim, travel, end));
             }
             // The checks.
             let mut widen = Vec::new();
             let (mut boxes, mut slacks) = (0, 0);
-            for (mi, (_, travel)) in trials.iter().enumerate() {
+            for (mi, (_, travel, _)) in trials.iter().enumerate() {
                 for &(id, slot) in &self.multibodies[mi].links {
                     let t = &travel[id.index()];
                     let predicted = self.b(slot).motion(g).swept_com_aabb(self.box_span);
@@ -259,13 +267,10 @@ impl World {
     }
 
     /// Makes the trial the multibodies' state at `t_end`: every link pair's slack takes the
-    /// step's travel, and the link bodies move to their links.
-    fn commit_multibodies(
-        &mut self,
-        trials: Vec<(impulse_multibody::Simulation, Vec<LinkTravel>)>,
-        t_end: f64,
-    ) -> Result<(), SimError> {
-        for (mi, (sim, travel)) in trials.into_iter().enumerate() {
+    /// step's travel, and the link bodies move to their links (at the kinematics the trial
+    /// ended with).
+    fn commit_multibodies(&mut self, trials: Vec<Trial>, t_end: f64) -> Result<(), SimError> {
+        for (mi, (sim, travel, end)) in trials.into_iter().enumerate() {
             for k in 0..self.multibodies[mi].links.len() {
                 let (id, slot) = self.multibodies[mi].links[k];
                 let t = &travel[id.index()];
@@ -281,7 +286,7 @@ impl World {
                 }
             }
             self.multibodies[mi].sim = sim;
-            self.sync_links(mi)?;
+            self.place_links(mi, &end)?;
         }
         Ok(())
     }

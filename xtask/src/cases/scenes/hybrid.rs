@@ -39,13 +39,7 @@ pub(super) fn checks() -> Vec<SceneCheck> {
 /// turns about the joint's axis only. A ball
 /// has passed when its centre is below the opening by more than its radius.
 fn v20_see_saw(r: &Run<'_>) -> Result<Vec<Metric>, String> {
-    let desc = r
-        .scene
-        .desc
-        .multibodies
-        .iter()
-        .find(|m| m.name == "see-saw")
-        .ok_or("no see-saw in the scene")?;
+    let desc = multibody_desc(r, "see-saw")?;
     let joint = desc.joints.first().ok_or("the see-saw has no joint")?;
     let pivot = glam::DVec3::from_array(desc.position) + glam::DVec3::from_array(joint.position);
     let axis = glam::DVec3::from_array(joint.axis).normalize();
@@ -91,6 +85,19 @@ fn v20_see_saw(r: &Run<'_>) -> Result<Vec<Metric>, String> {
     ])
 }
 
+/// The description of multibody `name` in the scene that was run.
+fn multibody_desc<'a>(
+    r: &'a Run<'_>,
+    name: &str,
+) -> Result<&'a impulse_sim::scene::MultibodyDesc, String> {
+    r.scene
+        .desc
+        .multibodies
+        .iter()
+        .find(|m| m.name == name)
+        .ok_or_else(|| format!("no multibody \"{name}\" in the scene"))
+}
+
 /// Kinetic and potential energy of a multibody at `(q, v)`.
 fn energy(model: &impulse_multibody::Model, q: &[f64], v: &[f64]) -> Result<(f64, f64), String> {
     let mut ws = Workspace::new(model);
@@ -121,13 +128,7 @@ fn v19_triple_pendulum(r: &Run<'_>) -> Result<Vec<Metric>, String> {
         rise = rise.max(e - lowest);
         lowest = lowest.min(e);
     }
-    let desc = r
-        .scene
-        .desc
-        .multibodies
-        .iter()
-        .find(|m| m.name == "pendulum")
-        .ok_or("no pendulum in the scene")?;
+    let desc = multibody_desc(r, "pendulum")?;
     let (released, _) = desc
         .build(
             glam::DVec3::from_array(r.scene.desc.gravity),
