@@ -420,7 +420,9 @@ impl Accel for Rhs<'_> {
 /// controllers, advanced by an [`Integrator`].
 #[derive(Clone)]
 pub struct Simulation {
-    pub(crate) model: Model,
+    /// Shared between copies (a world's trial steps copy the simulation at every step; the
+    /// model changes only through [`Simulation::model_mut`], which copies it on write).
+    pub(crate) model: std::sync::Arc<Model>,
     pub(crate) q: Vec<f64>,
     pub(crate) v: Vec<f64>,
     pub(crate) t: f64,
@@ -493,7 +495,7 @@ impl Simulation {
             limit_stats: LimitStats::default(),
             instant: (f64::NEG_INFINITY, 0),
             travel: None,
-            model,
+            model: std::sync::Arc::new(model),
         })
         .and_then(|sim| {
             sim.check_limits()?;
@@ -509,7 +511,7 @@ impl Simulation {
 
     /// The model, mutable (gravity and passive elements may be changed between calls).
     pub fn model_mut(&mut self) -> &mut Model {
-        &mut self.model
+        std::sync::Arc::make_mut(&mut self.model)
     }
 
     /// Current time (s).
