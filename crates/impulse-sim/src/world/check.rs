@@ -38,8 +38,11 @@ pub(super) struct Scan {
     point_b: DVec3,
     /// Contact normal of the closest piece pair, from the second body toward the first.
     normal: Option<DVec3>,
-    /// Smallest key of the piece pairs other than the closest one (absolute time).
-    others_key: f64,
+    /// Every piece pair's slot and key (absolute time), in the order examined.
+    keys: Vec<(usize, f64)>,
+    /// The other piece pairs within ε_c (a table's legs on the floor), closest first: each
+    /// may be where the bodies press when the closest one does not.
+    near: Vec<NearPiece>,
     /// The closest piece pair (piece indices of the two bodies).
     pieces: (usize, usize),
     /// Its slot in the pair's per-piece-pair tables.
@@ -48,6 +51,43 @@ pub(super) struct Scan {
     depth: f64,
     /// The two bodies' motions at the check (for their time-of-impact bound).
     motions: (Motion, Motion),
+}
+
+/// A piece pair within ε_c other than the closest ([`Scan::near`]).
+#[derive(Clone, Copy, Debug)]
+struct NearPiece {
+    pieces: (usize, usize),
+    slot: usize,
+    distance: f64,
+    point_a: DVec3,
+    point_b: DVec3,
+    normal: Option<DVec3>,
+    /// Its interpenetration along its normal (0 when apart).
+    depth: f64,
+}
+
+impl Scan {
+    /// The closest piece pair as a [`NearPiece`].
+    fn closest(&self) -> NearPiece {
+        NearPiece {
+            pieces: self.pieces,
+            slot: self.slot,
+            distance: self.distance,
+            point_a: self.point_a,
+            point_b: self.point_b,
+            normal: self.normal,
+            depth: self.depth,
+        }
+    }
+
+    /// The smallest key of the piece pairs other than the closest and those in `except`.
+    fn others_key(&self, except: &[NearPiece]) -> f64 {
+        self.keys
+            .iter()
+            .filter(|(s, _)| *s != self.slot && except.iter().all(|e| e.slot != *s))
+            .map(|(_, k)| *k)
+            .fold(f64::INFINITY, f64::min)
+    }
 }
 
 impl World {
@@ -95,6 +135,8 @@ impl World {
         let mut checks = 0u64;
         let mut depth = 0.0f64;
         let mut touching = false;
+        let eps = schedule.collision_epsilon;
+        let mut near: Vec<NearPiece> = Vec::new();
         for &(lb, i, j) in &order {
             if let Some((fa, fb)) = free {
                 if schedule.can_skip(lb, best.as_ref().map(|x| x.0), fa, fb, min_key - time) {
@@ -104,6 +146,7 @@ impl World {
             let (pa, pb) = (&pieces_a[i], &pieces_b[j]);
             let (pose_a, pose_b) = (ba.pose * pa.pose, bb.pose * pb.pose);
             let slot = i * nb + j;
+            let mut piece_depth = 0.0;
             let c = shape::convex_closest(
                 &pa.convex,
                 &pose_a,
@@ -144,10 +187,22 @@ impl World {
                     let along = depth::overlap_along(&pa.convex, &pose_a, &pb.convex, &pose_b, n);
                     if along.is_finite() {
                         depth = depth.max(along);
+                        piece_depth = along;
                     }
                 }
             }
             let d = if c.penetrating { 0.0 } else { c.distance };
+            if d < eps {
+                near.push(NearPiece {
+                    pieces: (i, j),
+                    slot,
+                    distance: d,
+                    point_a: c.point_a,
+                    point_b: c.point_b,
+                    normal: state.normals[slot],
+                    depth: piece_depth,
+                });
+            }
             let key = match state.normals[slot] {
                 None => time,
                 Some(n) => {
@@ -174,11 +229,8 @@ impl World {
         let Some((d, c, slot)) = best else {
             unreachable!("a shape has at least one piece")
         };
-        let others_key = keys
-            .iter()
-            .filter(|(s, _)| *s != slot)
-            .map(|(_, k)| *k)
-            .fold(f64::INFINITY, f64::min);
+        near.retain(|p| p.slot != slot);
+        near.sort_by(|x, y| x.distance.total_cmp(&y.distance).then(x.slot.cmp(&y.slot)));
         let normal = state.normals[slot];
         if touching {
             self.counters.touching_checks += 1;
@@ -190,7 +242,8 @@ impl World {
             point_a: c.point_a,
             point_b: c.point_b,
             normal,
-            others_key,
+            keys,
+            near,
             pieces: (slot / nb, slot % nb),
             slot,
             depth,
@@ -217,17 +270,26 @@ impl World {
                 }
             }
         }
-        let key = self.key_for(pair, &scan, false);
+        let key = self.key_for(pair, &scan, false, &[]);
         self.note_slack(pair, scan.normal, scan.pieces, scan.motions, scan.distance);
         key
     }
 
     /// The key of a pair: the earliest time any of its piece pairs could close the gap to the
-    /// target (`impulse_collide::schedule`). Only the closest piece pair of a pair just checked
-    /// at the top of the heap (`at_top`) gets the gap floor, which guarantees progress;
+    /// target (`impulse_collide::schedule`). Of a pair just checked at the top of the heap
+    /// (`at_top`), the closest piece pair gets the gap floor, which guarantees progress, and
+    /// so do the other piece pairs within ε_c the check found not pressing (`calm`: a table
+    /// standing on four legs has four piece pairs at one gap, and with the floor for the
+    /// closest alone the other three were due at the same instant for ever, measured);
     /// elsewhere the bound stays conservative, so a pair re-keyed while touching comes back
     /// to the top at once.
-    fn key_for(&self, (a, b): (u32, u32), scan: &Scan, at_top: bool) -> f64 {
+    fn key_for(
+        &self,
+        (a, b): (u32, u32),
+        scan: &Scan,
+        at_top: bool,
+        calm: &[NearPiece],
+    ) -> f64 {
         let Some(n) = scan.normal else {
             return self.time; // touching with no known normal: check again now.
         };
@@ -236,21 +298,29 @@ impl World {
         #[cfg(not(test))]
         let toi_scale = 1.0;
         let (ba, bb) = (self.b(a), self.b(b));
-        let tau = self.schedule.piece_toi(
-            scan.distance,
-            scan.depth,
-            n,
-            at_top,
-            Mover {
-                motion: &scan.motions.0,
-                reach: ba.reach[scan.pieces.0],
-            },
-            Mover {
-                motion: &scan.motions.1,
-                reach: bb.reach[scan.pieces.1],
-            },
-        );
-        (self.time + toi_scale * tau).min(scan.others_key)
+        let tau = |p: &NearPiece, n: DVec3| {
+            self.schedule.piece_toi(
+                p.distance,
+                p.depth,
+                n,
+                at_top,
+                Mover {
+                    motion: &scan.motions.0,
+                    reach: ba.reach[p.pieces.0],
+                },
+                Mover {
+                    motion: &scan.motions.1,
+                    reach: bb.reach[p.pieces.1],
+                },
+            )
+        };
+        let mut key = self.time + toi_scale * tau(&scan.closest(), n);
+        for p in calm {
+            if let Some(pn) = p.normal {
+                key = key.min(self.time + toi_scale * tau(p, pn));
+            }
+        }
+        key.min(scan.others_key(calm))
     }
 
     /// Checks the top pair, resolves a collision, re-keys, and applies the hysteresis rule.
@@ -258,16 +328,38 @@ impl World {
         let scan = self.query(pair);
         let mut hit = false;
         let mut held = false;
+        // Piece pairs within ε_c found not pressing (they get the progress floor).
+        let mut calm: Vec<NearPiece> = Vec::new();
         if scan.distance < self.collision_epsilon() {
             if let Some(n) = scan.normal {
-                let x = self.contact_point(pair, &scan, n);
+                let x = self.contact_point(pair, &scan.closest(), n);
                 let mid = 0.5 * (scan.point_a + scan.point_b);
                 // In the switching model a pair that is neither approaching nor separating
                 // faster than the switching speed is held, pressing or not (a body placed
                 // touching, or sliding along a surface, is in sustained contact from now).
                 let hold = self.holds(pair, x.unwrap_or(mid), n);
-                let struck = !hold && x.is_some() && self.struck_again(pair);
-                if hold || x.is_some() {
+                // Where the bodies press: the closest piece pair, or else the closest other
+                // piece pair within ε_c that does (a table standing on four legs).
+                let press = match x {
+                    _ if hold => None,
+                    Some(x) => Some((x, n, scan.distance)),
+                    None => {
+                        let mut found = None;
+                        for p in &scan.near {
+                            let Some(pn) = p.normal else { continue };
+                            match self.contact_point(pair, p, pn) {
+                                Some(x) => {
+                                    found = Some((x, pn, p.distance));
+                                    break;
+                                }
+                                None => calm.push(*p),
+                            }
+                        }
+                        found
+                    }
+                };
+                let struck = !hold && press.is_some() && self.struck_again(pair);
+                if hold || press.is_some() {
                     // A sleeping island touched by something approaching wakes first.
                     let mut woken = self.wake(pair.0);
                     woken.extend(self.wake(pair.1));
@@ -281,7 +373,7 @@ impl World {
                 } else if struck {
                     self.hold_struck(pair);
                     held = true;
-                } else if let Some(x) = x {
+                } else if let Some((x, n, d)) = press {
                     // A slow contact that is not held because a body turns too fast makes
                     // that body wholly impulse-driven: a body half held would be pressed by a
                     // held load its microcollisions do not know of.
@@ -297,7 +389,7 @@ impl World {
                         let stale = std::mem::take(&mut self.stale);
                         self.rekey(&stale, Some(pair))?;
                     }
-                    hit = self.resolve(pair, x, n, scan.distance);
+                    hit = self.resolve(pair, x, n, d);
                     if hit {
                         let time = self.time;
                         if let Some(state) = self.pairs.get_mut(&pair) {
@@ -323,7 +415,8 @@ impl World {
             f64::INFINITY
         } else {
             let scan = if hit { self.query(pair) } else { scan };
-            let key = self.key_for(pair, &scan, true);
+            let calm = if hit { &[][..] } else { &calm[..] };
+            let key = self.key_for(pair, &scan, true, calm);
             self.note_slack(pair, scan.normal, scan.pieces, scan.motions, scan.distance);
             key
         };
@@ -350,7 +443,7 @@ impl World {
     /// near);
     /// `None` when none of them approaches (nothing presses). Without near vertices, and for
     /// smooth pieces, the midpoint of the closest points.
-    fn contact_point(&self, (a, b): (u32, u32), scan: &Scan, n: DVec3) -> Option<DVec3> {
+    fn contact_point(&self, (a, b): (u32, u32), scan: &NearPiece, n: DVec3) -> Option<DVec3> {
         let mid = 0.5 * (scan.point_a + scan.point_b);
         let (ba, bb) = (self.b(a), self.b(b));
         let (pa, pb) = (
