@@ -515,7 +515,10 @@ fn furniture_placed_standing_on_its_legs_stands_in_both_models() {
     let eps = 1e-4;
     for model in ["Impulse", "Switching"] {
         for (name, legs) in [
-            ("table", vec![(0.55, 0.35), (-0.55, 0.35), (0.55, -0.35), (-0.55, -0.35)]),
+            (
+                "table",
+                vec![(0.55, 0.35), (-0.55, 0.35), (0.55, -0.35), (-0.55, -0.35)],
+            ),
             ("stool", vec![(0.15, 0.15), (-0.15, -0.15), (-0.15, 0.15)]),
         ] {
             let parts: Vec<String> = legs
@@ -548,14 +551,22 @@ fn furniture_placed_standing_on_its_legs_stands_in_both_models() {
             // (measured: 4.1 ε_c for the table, 3.1 ε_c for the stool in 1 s; the
             // switching model's held contacts do not): in the impulse model the body stays
             // within the envelope, in the switching model it stays put.
-            let bound = if model == "Impulse" { DVec3::new(10.0, 10.0, 1.0) } else { DVec3::ONE };
+            let bound = if model == "Impulse" {
+                DVec3::new(10.0, 10.0, 1.0)
+            } else {
+                DVec3::ONE
+            };
             assert!(
                 moved.abs().cmple(bound * eps).all(),
                 "{model}, {name}: moved {} ε_c",
                 moved / eps
             );
             let depth = w.checked_penetration().unwrap().max_depth;
-            assert!(depth <= eps, "{model}, {name}: penetration {} ε_c", depth / eps);
+            assert!(
+                depth <= eps,
+                "{model}, {name}: penetration {} ε_c",
+                depth / eps
+            );
         }
     }
 }

@@ -283,13 +283,7 @@ impl World {
     /// closest alone the other three were due at the same instant for ever, measured);
     /// elsewhere the bound stays conservative, so a pair re-keyed while touching comes back
     /// to the top at once.
-    fn key_for(
-        &self,
-        (a, b): (u32, u32),
-        scan: &Scan,
-        at_top: bool,
-        calm: &[NearPiece],
-    ) -> f64 {
+    fn key_for(&self, (a, b): (u32, u32), scan: &Scan, at_top: bool, calm: &[NearPiece]) -> f64 {
         let Some(n) = scan.normal else {
             return self.time; // touching with no known normal: check again now.
         };
