@@ -570,3 +570,68 @@ fn furniture_placed_standing_on_its_legs_stands_in_both_models() {
         }
     }
 }
+
+/// Smooth ellipsoids placed touching a floor at any point of their surface (random semi-axes
+/// and orientations, the lowest point on the floor), in both contact models, for 0.2 s: the
+/// independent monitor sees no penetration beyond ε_c, and no centre of mass goes below the
+/// lowest it can rest at on a floor (its smallest semi-axis, less ε_c). A wheel-shaped
+/// ellipsoid standing on its rim used to fall through the floor within 0.1 s: its contact
+/// point came from GJK's witness on the floor's face, anywhere on that face.
+#[test]
+fn ellipsoids_placed_touching_a_floor_in_any_orientation_do_not_sink() {
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand::{RngExt, SeedableRng};
+    let eps = 1e-4;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(31);
+    for case in 0..8 {
+        let semi = DVec3::new(
+            rng.random_range(0.02..0.08),
+            rng.random_range(0.02..0.08),
+            rng.random_range(0.02..0.08),
+        );
+        let axis = DVec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        )
+        .normalize();
+        let angle = rng.random_range(0.3..3.0_f64);
+        let q = glam::DQuat::from_axis_angle(axis, angle);
+        // Height of the centre above the lowest point: |S Rᵀ ẑ| (the support value).
+        let lift = (semi * (q.inverse() * DVec3::Z)).length();
+        for model in ["Impulse", "Switching"] {
+            let ron = format!(
+                "Scene(collision_epsilon: {eps}, contact_model: {model},
+                  default_contact: Contact(friction: 0.5, restitution: 0.2),
+                  bodies: [
+                    Body(name: \"floor\", motion: Fixed, shape: Box(half_extents: (1, 1, 0.05)),
+                         position: (0, 0, -0.05)),
+                    Body(name: \"egg\", shape: Ellipsoid(semi_axes: ({}, {}, {})),
+                         position: (0, 0, {lift}),
+                         rotation: Quaternion({}, {}, {}, {}), mass: Density(1000.0)),
+                  ])",
+                semi.x, semi.y, semi.z, q.x, q.y, q.z, q.w
+            );
+            let mut w = world(&ron);
+            w.set_checking(true);
+            let lowest = semi.min_element() - eps;
+            let mut t = 0.0;
+            while t < 0.2 {
+                t += 0.01;
+                w.step_until(t)
+                    .unwrap_or_else(|e| panic!("case {case}, {model}: {e}"));
+                let z = body(&w, "egg").pose.translation.z;
+                assert!(
+                    z >= lowest,
+                    "case {case}, {model}: centre at {z}, lowest {lowest}"
+                );
+            }
+            let depth = w.checked_penetration().unwrap().max_depth;
+            assert!(
+                depth <= eps,
+                "case {case}, {model}: penetration {} ε_c",
+                depth / eps
+            );
+        }
+    }
+}
