@@ -65,7 +65,8 @@ enum Command {
         #[arg(long, value_enum)]
         contact_model: Option<run::ContactModelArg>,
         /// Print where the wall time went: multibody dynamics, rigid bodies, collision
-        /// detection, collision response, sustained contact (thesis Table 7.2).
+        /// detection, collision response, sustained contact, high-level control (thesis Table
+        /// 7.2).
         #[arg(long)]
         profile: bool,
     },

@@ -356,7 +356,7 @@ fn profile_prints_shares_that_add_up() {
         .skip_while(|l| !l.starts_with("profile:"))
         .filter_map(parse)
         .collect();
-    assert_eq!(shares.len(), 6, "{stdout}");
+    assert_eq!(shares.len(), 7, "{stdout}");
     let total: f64 = shares.iter().map(|(_, p)| p).sum();
     assert!((total - 100.0).abs() < 0.5, "{shares:?}");
     let top = shares.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();

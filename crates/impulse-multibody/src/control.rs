@@ -603,6 +603,40 @@ impl Simulation {
             .downcast_mut::<T>()
     }
 
+    /// Sets the targets `q_des`, `q̇_des` of every [`JointPd`] and [`JointPid`] on joint
+    /// `joint` (coordinate order) and returns how many there are. A digital controller: the
+    /// new targets act from each controller's next update on its own grid.
+    ///
+    /// # Errors
+    /// [`MultibodyError::UnknownName`] for a joint out of range,
+    /// [`MultibodyError::InvalidJoint`] for a target that is not finite.
+    pub fn set_joint_targets(
+        &mut self,
+        joint: usize,
+        q_des: f64,
+        qd_des: f64,
+    ) -> Result<usize, MultibodyError> {
+        let name = check_joint(&self.model, joint)?;
+        check_finite(name, &[("q_des", q_des), ("qd_des", qd_des)])?;
+        let mut set = 0;
+        for slot in &mut self.slots {
+            let any = slot.ctrl.as_any_mut();
+            let pd = if let Some(pid) = any.downcast_mut::<JointPid>() {
+                &mut pid.pd
+            } else if let Some(pd) = any.downcast_mut::<JointPd>() {
+                pd
+            } else {
+                continue;
+            };
+            if pd.joint == joint {
+                pd.q_des = q_des;
+                pd.qd_des = qd_des;
+                set += 1;
+            }
+        }
+        Ok(set)
+    }
+
     /// Enables or disables a controller. A disabled controller contributes nothing and is not
     /// updated. Re-enabled (the thesis's setPID), it updates at once — at the current time,
     /// before any further integration — and then continues on its original grid
@@ -692,6 +726,19 @@ impl Simulation {
             &mut vdot,
         )?;
         Ok(crate::travel::kinematics(&self.model, &mut self.ws))
+    }
+
+    /// When the next controller update is due (simulation time; ∞ without enabled
+    /// controllers): [`Simulation::run_until`] stops there, and a hybrid event loop ends its
+    /// step there so that its predictions start from the new outputs (thesis §5.4: control
+    /// updates are events).
+    #[must_use]
+    pub fn next_control_time(&self) -> f64 {
+        self.slots
+            .iter()
+            .filter(|s| s.enabled)
+            .map(|s| if s.pending { self.t } else { s.next_time() })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Runs the controllers due at the current time and sums the held outputs.

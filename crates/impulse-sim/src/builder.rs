@@ -46,6 +46,7 @@ impl SceneDesc {
             contact_model: crate::sustained::ContactMode::default(),
             bodies: Vec::new(),
             multibodies: Vec::new(),
+            controllers: Vec::new(),
         }
     }
 

@@ -52,6 +52,7 @@ pub mod body;
 mod build;
 mod builder;
 pub mod contact;
+pub mod controllers;
 mod error;
 pub mod monitor;
 pub mod record;
@@ -65,8 +66,9 @@ pub use record::{Frame, Recording, run};
 pub use scene::{Scene, SceneDesc};
 pub use sustained::{ContactMode, SustainedSettings};
 pub use world::{
-    BodyHandle, BodyState, ContactEvent, ContactFailure, Counters, LinkShape, Load, LoadFn,
-    Material, MultibodyHandle, Profile, StepReport, World, WorldSettings,
+    BodyHandle, BodyState, ContactEvent, ContactFailure, Control, ControllerHandle, Counters,
+    LinkShape, Load, LoadFn, Material, MultibodyHandle, Profile, StepReport, World,
+    WorldController, WorldSettings,
 };
 
 #[cfg(test)]

@@ -37,8 +37,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::SimError;
 
+pub mod controllers;
 mod multibody;
 
+pub use controllers::{GoalDesc, WorldControllerDesc};
 pub use multibody::{
     BaseDesc, ControllerDesc, InertiaDesc, JointDesc, JointKindDesc, LimitDesc, LinkDesc,
     MultibodyDesc,
@@ -89,6 +91,10 @@ pub struct SceneDesc {
     /// ch. 5; [`MultibodyDesc`]).
     #[serde(default)]
     pub multibodies: Vec<MultibodyDesc>,
+    /// High-level controllers: steering bodies by external forces, launching them by
+    /// velocity overwrite (thesis §7.3; [`WorldControllerDesc`]).
+    #[serde(default)]
+    pub controllers: Vec<WorldControllerDesc>,
 }
 
 /// Most frames a run may record (`duration × output_rate`): beyond this the recording alone
@@ -533,6 +539,18 @@ impl SceneDesc {
                 "bodies",
                 "no body is dynamic: nothing would move".into(),
             ));
+        }
+        let bodies: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
+        let mut controllers: FxHashSet<&str> = FxHashSet::default();
+        for c in &self.controllers {
+            c.validate(&bodies)?;
+            if !controllers.insert(c.name()) {
+                return Err(SimError::Invalid {
+                    what: format!("controller \"{}\"", c.name()),
+                    field: "name".into(),
+                    problem: "another controller has the same name".into(),
+                });
+            }
         }
         Ok(())
     }

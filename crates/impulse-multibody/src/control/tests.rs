@@ -415,3 +415,55 @@ fn a_pd_velocity_loop_drives_a_wheel_to_its_commanded_speed_along_the_held_torqu
         "not at its commanded speed"
     );
 }
+
+/// Targets set after the controllers were added ([`Simulation::set_joint_targets`]) reach
+/// every PD and PID on the joint: a wheel with one velocity PD and one velocity PID (k_p =
+/// k_i = 0), both commanded by the call, follows the closed form of the held torques with
+/// the sum of their gains, ω_k = ω_des·(1 − (1 − 2·h·k_v/I)^k).
+#[test]
+fn joint_targets_set_later_reach_every_pd_and_pid_on_the_joint() {
+    let (i_axle, kv, h, w_des) = (0.05, 0.4, 1e-2, -7.0);
+    let mut b = ModelBuilder::new(BaseKind::Fixed);
+    b.gravity(DVec3::ZERO)
+        .link("chassis", SpatialInertia::ZERO)
+        .link(
+            "wheel",
+            SpatialInertia::new(
+                2.0,
+                DVec3::ZERO,
+                DMat3::from_diagonal(DVec3::new(0.03, 0.03, i_axle)),
+            ),
+        )
+        .joint(JointSpec::revolute(
+            "axle",
+            "chassis",
+            "wheel",
+            Pose::IDENTITY,
+            DVec3::Z,
+        ));
+    let mut sim = Simulation::new(b.build().unwrap(), vec![0.0], vec![0.0], tight()).unwrap();
+    sim.add_controller(Box::new(JointPd::new(0, 0.0, kv, h)))
+        .unwrap();
+    sim.add_controller(Box::new(JointPid::new(0, 0.0, kv, 0.0, h)))
+        .unwrap();
+    // Before the first update: both controllers hold target 0, so nothing moves.
+    assert_eq!(sim.set_joint_targets(0, 0.0, w_des).unwrap(), 2);
+    let decay = 1.0 - 2.0 * h * kv / i_axle;
+    for k in 1..=100 {
+        sim.run_until(k as f64 * h).unwrap();
+        let want = w_des * (1.0 - decay.powi(k));
+        assert!(
+            (sim.v()[0] - want).abs() <= EXACT * w_des.abs(),
+            "update {k}: ω = {} against {want}",
+            sim.v()[0]
+        );
+    }
+    assert!(matches!(
+        sim.set_joint_targets(1, 0.0, 0.0),
+        Err(MultibodyError::UnknownName { .. })
+    ));
+    assert!(matches!(
+        sim.set_joint_targets(0, f64::NAN, 0.0),
+        Err(MultibodyError::InvalidJoint { .. })
+    ));
+}

@@ -170,6 +170,18 @@ impl World {
     /// # Errors
     /// [`SimError::Runtime`] when a multibody cannot be integrated (naming it), or from the
     /// broad phase and the heap.
+    /// The next joint-controller update of any multibody after `t0` (world time; ∞ without
+    /// one). A loop step ends there (thesis §5.4: control updates are events in the heap), so
+    /// each step's link predictions start from the torques that hold over it. (Measured on a
+    /// rover driving with 200 Hz wheel loops, this alone did not change its redone steps.)
+    pub(super) fn next_multibody_control(&self, t0: f64) -> f64 {
+        self.multibodies
+            .iter()
+            .map(|m| m.offset + m.sim.next_control_time())
+            .filter(|&t| t > t0)
+            .fold(f64::INFINITY, f64::min)
+    }
+
     pub(super) fn advance_multibodies(&mut self, t0: f64, t_end: &mut f64) -> Result<(), SimError> {
         if self.multibodies.is_empty() {
             return Ok(());

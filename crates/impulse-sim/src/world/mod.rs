@@ -42,6 +42,7 @@
 
 mod api;
 mod check;
+mod control;
 mod hybrid;
 mod hybrid_contact;
 mod hybrid_step;
@@ -61,6 +62,7 @@ use impulse_collide::{CollisionHeap, FeaturePair};
 use rustc_hash::FxHashMap;
 
 pub use api::{Load, LoadFn};
+pub use control::{Control, ControllerHandle, WorldController, WorldControllerClone};
 pub use hybrid::{LinkShape, MultibodyHandle};
 pub use hybrid_step::{MAX_STEP_REDOS, SLACK_ROUNDING_REL};
 pub use materials::Material;
@@ -109,6 +111,13 @@ pub struct BodyHandle {
 }
 
 impl BodyHandle {
+    /// A handle that names no body of any world (slot `u32::MAX`): a stand-in where a
+    /// description is checked before its world exists.
+    pub(crate) const PLACEHOLDER: Self = Self {
+        index: u32::MAX,
+        generation: u32::MAX,
+    };
+
     /// The body's slot in the world (slots of removed bodies are reused, with a new
     /// generation).
     #[must_use]
@@ -185,6 +194,8 @@ pub struct Counters {
     /// Collisions and microcollisions involving a multibody link (also counted in
     /// `collisions` or `microcollisions`).
     pub link_contacts: u64,
+    /// Updates of high-level controllers ([`World::add_controller`]).
+    pub controller_updates: u64,
 }
 
 /// One resolved contact ([`World::contacts`], [`World::set_event_log`]).
@@ -420,6 +431,8 @@ pub struct World {
     recent: Vec<ContactEvent>,
     failures: Vec<ContactFailure>,
     loads: Vec<LoadSchedule>,
+    /// High-level controllers (`None`: removed), in the order they were added.
+    controllers: Vec<Option<control::ControllerSlot>>,
     /// Bodies whose heap pairs need new bounds before the next step (moved, pushed or loaded
     /// by the program).
     stale: Vec<u32>,
@@ -520,6 +533,7 @@ impl World {
             recent: Vec::new(),
             failures: Vec::new(),
             loads: Vec::new(),
+            controllers: Vec::new(),
             stale: Vec::new(),
             checking: None,
             moving: Vec::new(),
@@ -558,6 +572,9 @@ impl World {
         for m in &desc.multibodies {
             let (sim, shapes) = m.build(world.gravity, &scene.base_dir)?;
             world.add_multibody(&m.name, sim, shapes)?;
+        }
+        for c in &desc.controllers {
+            c.add_to(&mut world)?;
         }
         Ok(world)
     }
@@ -799,6 +816,8 @@ impl World {
 #[cfg(test)]
 mod island_tests;
 
+#[cfg(test)]
+mod control_tests;
 #[cfg(test)]
 mod hybrid_tests;
 

@@ -21,6 +21,10 @@ pub struct Profile {
     pub response: Duration,
     /// The switching model's island steps (sustained contact as constraints).
     pub islands: Duration,
+    /// High-level controllers' updates and the new bounds their commands need
+    /// ([`World::add_controller`]; thesis Table 7.2's "control"; the joint controllers run
+    /// inside their multibodies' integration and count as dynamics).
+    pub control: Duration,
     /// Everything else in the loop (load functions, the checking monitor, bookkeeping).
     pub other: Duration,
     /// The whole of the loop's steps.
@@ -30,7 +34,7 @@ pub struct Profile {
 impl Profile {
     /// Each part's share of the total, in the order of the fields, with its name.
     #[must_use]
-    pub fn shares(&self) -> [(&'static str, f64); 6] {
+    pub fn shares(&self) -> [(&'static str, f64); 7] {
         let t = self.total.as_secs_f64().max(f64::MIN_POSITIVE);
         let s = |d: Duration| d.as_secs_f64() / t;
         [
@@ -39,6 +43,7 @@ impl Profile {
             ("collision detection", s(self.detection)),
             ("collision response", s(self.response)),
             ("sustained contact (islands)", s(self.islands)),
+            ("control", s(self.control)),
             ("other", s(self.other)),
         ]
     }
@@ -52,6 +57,7 @@ pub(crate) enum Part {
     Detection,
     Response,
     Islands,
+    Control,
 }
 
 impl World {
@@ -65,8 +71,12 @@ impl World {
     #[must_use]
     pub fn profile(&self) -> Option<Profile> {
         self.profile.map(|mut p| {
-            let timed =
-                p.multibody_dynamics + p.rigid_bodies + p.detection + p.response + p.islands;
+            let timed = p.multibody_dynamics
+                + p.rigid_bodies
+                + p.detection
+                + p.response
+                + p.islands
+                + p.control;
             p.other = p.total.saturating_sub(timed);
             p
         })
@@ -87,6 +97,7 @@ impl World {
                 Part::Detection => p.detection += d,
                 Part::Response => p.response += d,
                 Part::Islands => p.islands += d,
+                Part::Control => p.control += d,
             }
         }
     }

@@ -125,6 +125,7 @@ impl World {
                 .is_none_or(|(h, _)| !h.has_pending_changes())
             && self.heap.peek().is_none_or(|(_, key)| key > t)
             && self.next_load_time() > t
+            && self.next_controller_time() > t
             && self.islands.next_step > t
     }
 
@@ -173,6 +174,8 @@ impl World {
             .peek()
             .map_or(limit, |(_, k)| k.min(limit))
             .min(self.next_load_time())
+            .min(self.next_controller_time())
+            .min(self.next_multibody_control(t0))
             .min(self.islands.next_step.max(t0));
         // Every moving body's motion, once per step (a scratch buffer kept between steps).
         let (g, eps) = (self.gravity, self.collision_epsilon());
@@ -244,6 +247,13 @@ impl World {
         if self.next_load_time() <= self.time {
             self.evaluate_due_loads()?;
             self.rekey_stale()?;
+        }
+        // High-level controllers due now (scheduled as the loads are).
+        if self.next_controller_time() <= self.time {
+            let controlling = self.tick();
+            self.update_due_controllers()?;
+            self.rekey_stale()?;
+            self.charge(Part::Control, controlling);
         }
         // Island steps due now (the switching contact model) set new held loads, once every
         // pair due at this instant has been checked: pairs found touching at one instant (a
@@ -410,5 +420,6 @@ fn difference(a: &Counters, b: &Counters) -> Counters {
         slack_violations: a.slack_violations - b.slack_violations,
         unchecked_steps: a.unchecked_steps - b.unchecked_steps,
         link_contacts: a.link_contacts - b.link_contacts,
+        controller_updates: a.controller_updates - b.controller_updates,
     }
 }

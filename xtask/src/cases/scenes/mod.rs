@@ -14,7 +14,8 @@
 //! - `resting.rs`: V11 balls in dish, V13 block drop, V16 dominos, V17 coins, feeder chute;
 //! - `rattleback.rs`: V12, with the reversing direction predicted from the body's
 //!   inertia–curvature skew before the run;
-//! - `hybrid.rs`: V19 triple pendulum (multibodies in the world, §7.2);
+//! - `hybrid.rs`: V19 triple pendulum, V20 see-saw, the furniture scene's controllers
+//!   (multibodies and controllers in the world, §7.2–7.3), determinism of every hybrid scene;
 //! - `perturb.rs` (tests): each case fails when its scene is perturbed in the way it guards
 //!   against.
 
@@ -118,6 +119,11 @@ pub fn cases() -> Vec<Case> {
         name: "determinism-threads",
         description: "tumbling box run on 1 and on 2 threads: bit-identical trajectories (hash)",
         run: Box::new(impacts::determinism),
+    });
+    cases.push(Case {
+        name: "determinism-hybrid",
+        description: "every hybrid scene (multibodies or controllers) run for its first second on 1 and on 2 threads: bit-identical trajectories (hash)",
+        run: Box::new(hybrid::determinism),
     });
     cases
 }
