@@ -16,6 +16,7 @@
 //!   inertia–curvature skew before the run;
 //! - `hybrid.rs`: V19 triple pendulum, V20 see-saw, the furniture scene's controllers
 //!   (multibodies and controllers in the world, §7.2–7.3), determinism of every hybrid scene;
+//! - `rover.rs`: the rover driven by a high-level state machine (§7.3's creature war);
 //! - `perturb.rs` (tests): each case fails when its scene is perturbed in the way it guards
 //!   against.
 
@@ -25,6 +26,7 @@ mod impacts;
 mod perturb;
 mod rattleback;
 mod resting;
+mod rover;
 mod sliding;
 
 use std::path::{Path, PathBuf};
@@ -119,6 +121,11 @@ pub fn cases() -> Vec<Case> {
         name: "determinism-threads",
         description: "tumbling box run on 1 and on 2 threads: bit-identical trajectories (hash)",
         run: Box::new(impacts::determinism),
+    });
+    cases.push(Case {
+        name: "rover",
+        description: "a rover (7-link multibody, PD wheel loops) driven by a high-level state machine written against WorldController pushes every block off its platform (at most two pushes a block) and stays on it; no interpenetration",
+        run: Box::new(rover::rover),
     });
     cases.push(Case {
         name: "determinism-hybrid",
