@@ -40,8 +40,8 @@ use crate::error::SimError;
 mod multibody;
 
 pub use multibody::{
-    BaseDesc, ControllerDesc, InertiaDesc, JointDesc, JointKindDesc, LimitDesc, LinkDesc,
-    MultibodyDesc,
+    BaseDesc, ControllerDesc, InertiaDesc, JointDesc, JointKindDesc, JointOverride, LimitDesc,
+    LinkDesc, LinkOverride, MultibodyDesc, URDF_CYLINDER_SIDES, UrdfDesc,
 };
 
 /// A whole scene.
