@@ -486,6 +486,60 @@ mod tests {
         ));
     }
 
+    /// `<collision>` elements are read as written, in file order: geometry sizes, the default
+    /// mesh scale 1, the origin's rpy as `Rz(y)·Ry(p)·Rx(r)` built independently.
+    #[test]
+    fn collisions_are_read_as_written() {
+        let xml = robot(
+            r#"<link name="a">
+                 <collision><origin xyz="1 2 3" rpy="0.1 0.2 0.3"/><geometry><box size="0.4 0.5 0.6"/></geometry></collision>
+                 <collision><geometry><cylinder radius="0.1" length="0.7"/></geometry></collision>
+                 <collision><geometry><sphere radius="0.25"/></geometry></collision>
+                 <collision><geometry><mesh filename="m/part.obj"/></geometry></collision>
+                 <collision><geometry><mesh filename="p.obj" scale="1 2 3"/></geometry></collision>
+               </link><link name="b"/>"#,
+        );
+        let r = read_str(&xml).unwrap();
+        assert_eq!(r.roots(), ["a", "b"]);
+        let c = &r.links[0].collisions;
+        let geometries: Vec<&UrdfGeometry> = c.iter().map(|c| &c.geometry).collect();
+        assert_eq!(
+            geometries,
+            [
+                &UrdfGeometry::Box {
+                    size: [0.4, 0.5, 0.6]
+                },
+                &UrdfGeometry::Cylinder {
+                    radius: 0.1,
+                    length: 0.7
+                },
+                &UrdfGeometry::Sphere { radius: 0.25 },
+                &UrdfGeometry::Mesh {
+                    filename: "m/part.obj".into(),
+                    scale: [1.0; 3]
+                },
+                &UrdfGeometry::Mesh {
+                    filename: "p.obj".into(),
+                    scale: [1.0, 2.0, 3.0]
+                },
+            ]
+        );
+        let want =
+            DMat3::from_rotation_z(0.3) * DMat3::from_rotation_y(0.2) * DMat3::from_rotation_x(0.1);
+        let got = c[0].origin.rotation_matrix();
+        assert!(
+            (got - want)
+                .abs()
+                .to_cols_array()
+                .iter()
+                .all(|x| *x < 1e-15),
+            "{got} {want}"
+        );
+        assert_eq!(c[0].origin.translation, DVec3::new(1.0, 2.0, 3.0));
+        assert_eq!(c[1].origin, Pose::IDENTITY);
+        assert!(r.links[1].collisions.is_empty());
+    }
+
     /// The bundled fixture: a double pendulum whose mass matrix matches the closed form.
     #[test]
     fn fixture_double_pendulum_mass_matrix() {

@@ -43,6 +43,9 @@ fn urdf_pendulum(extra: &str) -> MultibodyDesc {
 fn inline_pendulum() -> MultibodyDesc {
     let yaw = DQuat::from_rotation_z(0.3);
     let roll = DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2);
+    // URDF rpy (r, p, y) is the fixed-axis rotation Rz(y)·Ry(p)·Rx(r).
+    let tilt =
+        DQuat::from_rotation_z(0.1) * DQuat::from_rotation_y(0.2) * DQuat::from_rotation_x(0.3);
     let h = 0.002 * 10.0;
     let cube: Vec<String> = (0..8)
         .map(|k| {
@@ -59,7 +62,8 @@ fn inline_pendulum() -> MultibodyDesc {
                   Part(shape: Box(half_extents: (0.02, 0.02, 0.25)), position: (0.0, 0.0, -0.25)),
                   Part(shape: Prism(sides: 32, radius: 0.05, half_height: 0.02), position: (0.0, 0.0, -0.5),
                        rotation: Quaternion({}, {}, {}, {})),
-                  Part(shape: Hull(points: [{}]), position: (0.0, 0.0, -0.55)),
+                  Part(shape: Hull(points: [{}]), position: (0.0, 0.0, -0.55),
+                       rotation: Quaternion({}, {}, {}, {})),
                 ]),
                 inertia: Inertia(mass: 1.0, com: (0.0, 0.0, -0.25),
                   moments: (0.020966666666666668, 0.020966666666666668, 0.00026666666666666668))),
@@ -72,6 +76,10 @@ fn inline_pendulum() -> MultibodyDesc {
         roll.z,
         roll.w,
         cube.join(", "),
+        tilt.x,
+        tilt.y,
+        tilt.z,
+        tilt.w,
         yaw.x,
         yaw.y,
         yaw.z,
@@ -116,7 +124,6 @@ fn urdf_pendulum_matches_its_inline_twin_through_floor_impacts() {
     }
     let (ca, cb) = (a.counters(), b.counters());
     assert!(ca.link_contacts > 0, "no impact: {ca:?}");
-    assert_eq!(ca.link_contacts, cb.link_contacts);
     // The floor (top at z = 0.45) stops the bob (0.57 m below the pivot at z = 0.95) before
     // the rod hangs straight down: the swing never gets near q = 0.
     assert!(
@@ -128,6 +135,7 @@ fn urdf_pendulum_matches_its_inline_twin_through_floor_impacts() {
         ca.link_contacts
     );
     assert!(worst < TWIN_TOL, "URDF and inline differ by {worst:e}");
+    assert_eq!(ca.link_contacts, cb.link_contacts);
     // The fixed root's collision box (half extents 0.1, 0.1, 0.02, 2 cm above the link
     // origin) sits at the placement: centred at (0.1, 0, 1.02), turned 30° about z, so its
     // bounding box reaches 0.1·(cos 30° + sin 30°) either side in x and y.
@@ -179,6 +187,12 @@ fn collision_elements_map_to_shapes() {
     };
     let roll = DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2);
     assert!(DQuat::from_xyzw(x, y, z, w).angle_between(roll) < 1e-15);
+    let RotationDesc::Quaternion(x, y, z, w) = parts[2].rotation else {
+        panic!("{:?}", parts[2].rotation)
+    };
+    let tilt =
+        DQuat::from_rotation_z(0.1) * DQuat::from_rotation_y(0.2) * DQuat::from_rotation_x(0.3);
+    assert!(DQuat::from_xyzw(x, y, z, w).angle_between(tilt) < 1e-15);
     let ShapeDesc::Hull { points } = &parts[2].shape else {
         panic!("{:?}", parts[2].shape)
     };
