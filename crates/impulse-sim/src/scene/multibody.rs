@@ -23,7 +23,7 @@
 //! ```ron
 //! Multibody(
 //!     name: "arm",
-//!     urdf: Urdf(path: "../../urdf/two_link_arm.urdf",
+//!     urdf: Urdf(path: "../urdf/two_link_arm.urdf",
 //!                joints: [JointOverride(name: "shoulder", q: 0.5, damping: 0.01)]),
 //!     position: (0.0, 0.0, 1.0),
 //! )

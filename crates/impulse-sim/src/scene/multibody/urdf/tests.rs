@@ -505,3 +505,27 @@ fn inline_links_extend_a_urdf_multibody() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The examples of `docs/urdf.md` and README.md parse and build against the bundled arm, and
+/// the bundled scene's arm has the file's links and joints in the documented order.
+#[test]
+fn documented_examples_build() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    for doc in ["docs/urdf.md", "README.md"] {
+        let text = std::fs::read_to_string(root.join(doc)).unwrap();
+        let block = text
+            .split("```ron\n")
+            .skip(1)
+            .map(|b| b.split("```").next().unwrap())
+            .find(|b| b.contains("urdf: Urdf("))
+            .unwrap();
+        let m = multibody(block);
+        let (sim, shapes) = m.build(DVec3::new(0.0, 0.0, -9.81), &fixtures()).unwrap();
+        assert_eq!(sim.model().joint_names(), ["shoulder", "elbow"], "{doc}");
+        let links: Vec<&str> = shapes.iter().map(|s| s.link.as_str()).collect();
+        assert_eq!(links, ["pedestal", "upper", "forearm", "hand"], "{doc}");
+        assert_eq!(sim.q()[1], 0.3, "{doc}");
+    }
+    let scene = Scene::read(&fixtures().join("urdf-arm.ron")).unwrap();
+    World::from_scene(&scene).unwrap();
+}
