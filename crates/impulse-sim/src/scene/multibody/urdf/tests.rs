@@ -529,3 +529,44 @@ fn documented_examples_build() {
     let scene = Scene::read(&fixtures().join("urdf-arm.ron")).unwrap();
     World::from_scene(&scene).unwrap();
 }
+
+/// The same twins with a floating base (the mount given a mass by an override from its
+/// collision box, and inline from the same box), tumbling as they fall onto the floor: every
+/// coordinate of the base and the joint agrees to rounding ([`TWIN_TOL`]).
+#[test]
+fn floating_urdf_pendulum_matches_its_inline_twin() {
+    let float = |mut m: MultibodyDesc| {
+        m.base = crate::scene::BaseDesc::Floating;
+        m.angular_velocity = [0.3, -0.2, 0.5];
+        m.velocity = [0.0, 0.2, 0.0];
+        m
+    };
+    // A floating root needs mass: the mount plate's, from its collision box, in both.
+    let urdf = urdf_pendulum(r#"links: [LinkOverride(name: "mount", mass: Mass(0.5))]"#);
+    let mut inline = inline_pendulum();
+    inline.links[0].mass = Some(MassDesc::Mass(0.5));
+    let mut a = World::from_scene(&scene(float(urdf))).unwrap();
+    let mut b = World::from_scene(&scene(float(inline))).unwrap();
+    let (ha, hb) = (
+        a.multibody_handle("p").unwrap(),
+        b.multibody_handle("p").unwrap(),
+    );
+    let mut worst: f64 = 0.0;
+    while a.time() < 1.0 {
+        let t = a.time() + 0.01;
+        a.step_until(t).unwrap();
+        b.step_until(t).unwrap();
+        let (sa, sb) = (a.multibody(ha).unwrap(), b.multibody(hb).unwrap());
+        assert_eq!(sa.q().len(), 8);
+        for (x, y) in sa.q().iter().chain(sa.v()).zip(sb.q().iter().chain(sb.v())) {
+            worst = worst.max((x - y).abs());
+        }
+    }
+    let c = a.counters();
+    assert!(c.link_contacts > 0, "never reached the floor: {c:?}");
+    eprintln!(
+        "floating URDF vs inline: worst coordinate difference {worst:e}; {} link contacts",
+        c.link_contacts
+    );
+    assert!(worst < TWIN_TOL, "URDF and inline differ by {worst:e}");
+}
