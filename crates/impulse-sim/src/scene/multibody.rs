@@ -254,13 +254,18 @@ fn default_tolerance() -> f64 {
 }
 
 impl MultibodyDesc {
-    /// Builds the multibody's simulation and its links' shapes, in gravity `gravity`; shapes
-    /// from OBJ files resolve against `base_dir`.
+    /// Builds the multibody's simulation and its links' shapes, in gravity `gravity`; a URDF
+    /// file and shapes from OBJ files resolve against `base_dir` (a URDF's meshes against the
+    /// URDF's directory). A fixed root's shape is placed at `position`/`rotation` (its link
+    /// frame is the world's; the placement is folded into its joints).
     ///
     /// # Errors
     /// [`SimError::Invalid`] or [`SimError::Geometry`] naming the multibody and the link,
     /// joint or controller that is wrong (an unknown parent, a loop, a zero-mass link with
-    /// children, non-finite numbers, NaN gains, a controller on a missing joint).
+    /// children, non-finite numbers, NaN gains, a controller on a missing joint), and for a
+    /// URDF multibody the file, link, joint or override at fault (an unreadable or malformed
+    /// file, a link with two parents, no single root, an unsupported joint, collision geometry
+    /// or mesh format, an override naming nothing in the file).
     pub fn build(
         &self,
         gravity: DVec3,
