@@ -238,8 +238,13 @@ pub(super) fn parts(desc: &UrdfDesc, base_dir: &Path) -> Result<Parts, (String, 
             return Err((
                 "urdf".into(),
                 format!(
-                    "{}: every link is some joint's child (a loop): no root link",
-                    desc.path
+                    "{}: no root link ({})",
+                    desc.path,
+                    if robot.links.is_empty() {
+                        "the robot has no links"
+                    } else {
+                        "every link is some joint's child: a loop"
+                    }
                 ),
             ));
         }
