@@ -436,7 +436,7 @@ fn random_urdf_mutations_never_panic() {
         ("\"revolute\"", "\"prismatic\""),
         ("\"fixed\"", "\"continuous\""),
         ("<box", "<capsule radius=\"0.1\" length=\"0.2\"/><box"),
-        ("cube20.obj", "cube20.stl"),
+        ("cube20.obj", "cube20.dae"),
         ("cube20.obj", "nowhere.obj"),
         ("child link=\"hand\"", "child link=\"upper\""),
         ("parent link=\"pedestal\"", "parent link=\"hand\""),

@@ -44,6 +44,7 @@ use crate::build::rotation;
 use crate::error::SimError;
 use crate::world::LinkShape;
 
+mod stl;
 mod urdf;
 
 pub use urdf::{JointOverride, LinkOverride, URDF_CYLINDER_SIDES, UrdfDesc};

@@ -10,7 +10,7 @@
 //!
 //! Shapes: `box` → [`ShapeDesc::Box`], `sphere` → [`ShapeDesc::Sphere`], `cylinder` →
 //! [`ShapeDesc::Prism`] with [`URDF_CYLINDER_SIDES`] sides (axis along the collision frame's z,
-//! as URDF says), `mesh` → the convex polyhedron of a Wavefront OBJ file (scaled; a
+//! as URDF says), `mesh` → the convex polyhedron of a Wavefront OBJ or an STL file (scaled; a
 //! non-convex mesh is an error, as for [`ShapeDesc::Obj`]), each at its `<origin>` in the link
 //! frame; several `<collision>` elements make a [`ShapeDesc::Compound`].
 
@@ -196,10 +196,10 @@ fn mesh(
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    if ext.as_deref() != Some("obj") {
+    if !matches!(ext.as_deref(), Some("obj" | "stl")) {
         return Err(format!(
-            "mesh {}: unsupported format (only Wavefront .obj is read; convert STL or \
-             COLLADA meshes to OBJ, or give the link a `shape` override)",
+            "mesh {}: unsupported format (Wavefront .obj and .stl are read; convert COLLADA \
+             and other meshes, or give the link a `shape` override)",
             full.display()
         ));
     }
@@ -209,7 +209,11 @@ fn mesh(
             full.display()
         ));
     }
-    let read = obj::read(&full).map_err(|e| format!("mesh {}: {e}", full.display()))?;
+    let read = if ext.as_deref() == Some("stl") {
+        super::stl::read(&full).map_err(|e| format!("mesh {e}"))?
+    } else {
+        obj::read(&full).map_err(|e| format!("mesh {}: {e}", full.display()))?
+    };
     let s = DVec3::from_array(scale);
     let vertices: Vec<DVec3> = read.vertices().iter().map(|v| *v * s).collect();
     let scaled = PolyMesh::new(vertices, read.faces().map(<[u32]>::to_vec))

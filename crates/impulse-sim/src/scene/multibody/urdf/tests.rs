@@ -346,7 +346,7 @@ fn malformed_urdf_multibodies_name_the_culprit() {
                 joint("slider", "planar", "base", "arm")
             )),
         ),
-        ("stl.urdf", arm_collision(r#"<mesh filename="arm.stl"/>"#)),
+        ("stl.urdf", arm_collision(r#"<mesh filename="arm.dae"/>"#)),
         (
             "dae.urdf",
             arm_collision(r#"<mesh filename="package://robot/arm.dae"/>"#),
@@ -382,7 +382,7 @@ fn malformed_urdf_multibodies_name_the_culprit() {
         (
             "stl.urdf",
             "",
-            &["arm.stl", "unsupported format", "\"arm\""],
+            &["arm.dae", "unsupported format", "\"arm\""],
         ),
         ("dae.urdf", "", &["package://"]),
         ("concave.urdf", "", &["frame.obj", "convex"]),
@@ -569,4 +569,82 @@ fn floating_urdf_pendulum_matches_its_inline_twin() {
         c.link_contacts
     );
     assert!(worst < TWIN_TOL, "URDF and inline differ by {worst:e}");
+}
+
+/// An STL mesh (binary and ASCII, written here from the OBJ cube by fanning its faces into
+/// triangles) gives the same scaled hull as the OBJ it was written from.
+#[test]
+fn stl_meshes_give_the_hull_of_their_obj_twin() {
+    let obj_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/meshes/cube20.obj");
+    let mesh = impulse_geom::obj::read(&obj_path).unwrap();
+    let tris: Vec<[DVec3; 3]> = mesh
+        .faces()
+        .flat_map(|f| {
+            let v = |k: usize| mesh.vertices()[f[k] as usize];
+            (1..f.len() - 1).map(move |k| [v(0), v(k), v(k + 1)])
+        })
+        .collect();
+    let mut binary = vec![0u8; 80];
+    binary.extend_from_slice(&(tris.len() as u32).to_le_bytes());
+    let mut ascii = String::from("solid cube\n");
+    for t in &tris {
+        binary.extend_from_slice(&[0u8; 12]);
+        ascii.push_str("facet normal 0 0 0\nouter loop\n");
+        for p in t {
+            for x in p.to_array() {
+                binary.extend_from_slice(&(x as f32).to_le_bytes());
+            }
+            ascii.push_str(&format!("vertex {} {} {}\n", p.x, p.y, p.z));
+        }
+        binary.extend_from_slice(&[0u8; 2]);
+        ascii.push_str("endloop\nendfacet\n");
+    }
+    ascii.push_str("endsolid cube\n");
+    let urdf = |file: &str| {
+        robot(&format!(
+            r#"<link name="a"><collision><geometry><mesh filename="{file}" scale="0.01 0.02 0.03"/></geometry></collision></link>"#
+        ))
+    };
+    let obj_text = std::fs::read_to_string(&obj_path).unwrap();
+    let dir = temp(
+        "stl",
+        &[
+            ("cube.obj", &obj_text),
+            ("ascii.stl", &ascii),
+            ("obj.urdf", &urdf("cube.obj")),
+            ("bin.urdf", &urdf("bin.stl")),
+            ("ascii.urdf", &urdf("ascii.stl")),
+        ],
+    );
+    std::fs::write(dir.join("bin.stl"), &binary).unwrap();
+    let hull = |file: &str| {
+        let desc = UrdfDesc {
+            path: file.into(),
+            links: vec![],
+            joints: vec![],
+        };
+        let robot = desc.read(&dir).unwrap();
+        let Some(ShapeDesc::Compound { parts }) =
+            collision_shape(&robot.links[0], &desc, &dir).unwrap()
+        else {
+            panic!("no compound")
+        };
+        let ShapeDesc::Hull { points } = &parts[0].shape else {
+            panic!("{:?}", parts[0].shape)
+        };
+        let mut p = points.clone();
+        p.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        p
+    };
+    let want = hull("obj.urdf");
+    // The cube's corners at ±10, scaled by (0.01, 0.02, 0.03).
+    assert_eq!(want.len(), 8);
+    for p in &want {
+        for (x, h) in p.iter().zip([0.1, 0.2, 0.3]) {
+            assert!((x.abs() - h).abs() < 1e-15, "{p:?}");
+        }
+    }
+    assert_eq!(hull("bin.urdf"), want);
+    assert_eq!(hull("ascii.urdf"), want);
+    let _ = std::fs::remove_dir_all(&dir);
 }
