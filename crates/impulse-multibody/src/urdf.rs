@@ -2,8 +2,9 @@
 //!
 //! Mapping:
 //! - `<link>`: its `<inertial>` (origin xyz/rpy, mass, the six inertia entries about the centre
-//!   of mass in the inertial frame) becomes a [`SpatialInertia`] in the link frame. Visual and
-//!   collision geometry is ignored. A link without `<inertial>` has zero mass, which is fine
+//!   of mass in the inertial frame) becomes a [`SpatialInertia`] in the link frame. Visual
+//!   geometry is ignored; `<collision>` geometry does not enter the dynamics and is handed, as
+//!   written, to whoever gives links collision shapes ([`read_str`], [`UrdfRobot`]). A link without `<inertial>` has zero mass, which is fine
 //!   when it is welded to a massive link or is the fixed base, and an error when it moves on
 //!   its own.
 //! - `<joint>`: `revolute` and `continuous` become revolute joints, `prismatic` prismatic,
@@ -55,8 +56,151 @@ pub fn from_file(path: &Path, base: BaseKind) -> Result<Model, MultibodyError> {
     from_str(&xml, base)
 }
 
+/// A link's collision geometry as the URDF writes it (lengths in the file's units).
+#[derive(Clone, Debug, PartialEq)]
+pub enum UrdfGeometry {
+    /// `<box size="x y z"/>`: full side lengths, centred on the collision frame.
+    Box {
+        /// Full side lengths.
+        size: [f64; 3],
+    },
+    /// `<sphere radius/>` centred on the collision frame.
+    Sphere {
+        /// Radius.
+        radius: f64,
+    },
+    /// `<cylinder radius length/>`: axis along the collision frame's z, centred on its origin.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Full length along z.
+        length: f64,
+    },
+    /// `<capsule radius length/>` (URDF 1.2): a cylinder of `length` along z with hemispherical
+    /// caps.
+    Capsule {
+        /// Radius.
+        radius: f64,
+        /// Length of the cylindrical part.
+        length: f64,
+    },
+    /// `<mesh filename scale/>`: the file name as written (relative paths are relative to the
+    /// URDF file; `package://` and `file://` URIs are left to the caller).
+    Mesh {
+        /// The file name or URI.
+        filename: String,
+        /// Per-axis scale (default `1 1 1`).
+        scale: [f64; 3],
+    },
+}
+
+/// One `<collision>` element of a link.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfCollision {
+    /// Its `<origin>`: the geometry's frame in the link frame.
+    pub origin: Pose,
+    /// Its geometry.
+    pub geometry: UrdfGeometry,
+}
+
+/// One `<link>`: its mass properties and its collision elements in file order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfLink {
+    /// The link's name.
+    pub name: String,
+    /// Its `<inertial>` in the link frame ([`SpatialInertia::ZERO`] without one).
+    pub inertia: SpatialInertia,
+    /// Its `<collision>` elements.
+    pub collisions: Vec<UrdfCollision>,
+}
+
+/// A URDF robot as this crate reads it: links in file order and the joints as
+/// [`JointSpec`]s in file order (not yet checked to form a tree: [`UrdfRobot::model`] does).
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfRobot {
+    /// The robot's name.
+    pub name: String,
+    /// The links in file order.
+    pub links: Vec<UrdfLink>,
+    /// The joints in file order.
+    pub joints: Vec<JointSpec>,
+}
+
+impl UrdfRobot {
+    /// The links that are no joint's child (a well-formed robot has exactly one, its root).
+    #[must_use]
+    pub fn roots(&self) -> Vec<&str> {
+        self.links
+            .iter()
+            .map(|l| l.name.as_str())
+            .filter(|n| !self.joints.iter().any(|j| j.child == *n))
+            .collect()
+    }
+
+    /// The model (the root link as the base, fixed or floating as asked).
+    ///
+    /// # Errors
+    /// A [`MultibodyError`] naming the offending link or joint ([`ModelBuilder::build`]).
+    pub fn model(&self, base: BaseKind) -> Result<Model, MultibodyError> {
+        let mut b = ModelBuilder::new(base);
+        for l in &self.links {
+            b.link(&l.name, l.inertia);
+        }
+        for j in &self.joints {
+            b.joint(j.clone());
+        }
+        b.build()
+    }
+}
+
+/// Reads URDF text: links with their inertia and collision geometry, joints as specs.
+///
+/// # Errors
+/// [`MultibodyError::Urdf`] if the XML cannot be parsed; [`MultibodyError::Unsupported`]
+/// naming the joint for `floating`, `planar` and `spherical` joints and `<mimic>`.
+pub fn read_str(xml: &str) -> Result<UrdfRobot, MultibodyError> {
+    let robot = urdf_rs::read_from_string(xml).map_err(|e| MultibodyError::Urdf(e.to_string()))?;
+    read_robot(&robot)
+}
+
+/// Reads a URDF file as [`read_str`] does.
+///
+/// # Errors
+/// [`MultibodyError::Urdf`] naming the file if it cannot be read; otherwise as [`read_str`].
+pub fn read_file(path: &Path) -> Result<UrdfRobot, MultibodyError> {
+    let xml = std::fs::read_to_string(path)
+        .map_err(|e| MultibodyError::Urdf(format!("{}: {e}", path.display())))?;
+    read_str(&xml).map_err(|e| match e {
+        MultibodyError::Urdf(m) => MultibodyError::Urdf(format!("{}: {m}", path.display())),
+        other => other,
+    })
+}
+
+fn geometry(g: &urdf_rs::Geometry) -> UrdfGeometry {
+    match g {
+        urdf_rs::Geometry::Box { size } => UrdfGeometry::Box { size: size.0 },
+        urdf_rs::Geometry::Sphere { radius } => UrdfGeometry::Sphere { radius: *radius },
+        urdf_rs::Geometry::Cylinder { radius, length } => UrdfGeometry::Cylinder {
+            radius: *radius,
+            length: *length,
+        },
+        urdf_rs::Geometry::Capsule { radius, length } => UrdfGeometry::Capsule {
+            radius: *radius,
+            length: *length,
+        },
+        urdf_rs::Geometry::Mesh { filename, scale } => UrdfGeometry::Mesh {
+            filename: filename.clone(),
+            scale: scale.map_or([1.0; 3], |s| s.0),
+        },
+    }
+}
+
 fn from_robot(robot: &urdf_rs::Robot, base: BaseKind) -> Result<Model, MultibodyError> {
-    let mut b = ModelBuilder::new(base);
+    read_robot(robot)?.model(base)
+}
+
+fn read_robot(robot: &urdf_rs::Robot) -> Result<UrdfRobot, MultibodyError> {
+    let mut links = Vec::with_capacity(robot.links.len());
     for link in &robot.links {
         let i = &link.inertial;
         let frame = pose(&i.origin);
@@ -67,11 +211,24 @@ fn from_robot(robot: &urdf_rs::Robot, base: BaseKind) -> Result<Model, Multibody
             DVec3::new(t.ixz, t.iyz, t.izz),
         );
         let r = frame.rotation_matrix();
-        b.link(
-            &link.name,
-            SpatialInertia::new(i.mass.value, frame.translation, r * inertia * r.transpose()),
-        );
+        links.push(UrdfLink {
+            name: link.name.clone(),
+            inertia: SpatialInertia::new(
+                i.mass.value,
+                frame.translation,
+                r * inertia * r.transpose(),
+            ),
+            collisions: link
+                .collision
+                .iter()
+                .map(|c| UrdfCollision {
+                    origin: pose(&c.origin),
+                    geometry: geometry(&c.geometry),
+                })
+                .collect(),
+        });
     }
+    let mut joints = Vec::with_capacity(robot.joints.len());
     for j in &robot.joints {
         let unsupported = |what: &str| MultibodyError::Unsupported {
             joint: j.name.clone(),
@@ -102,9 +259,13 @@ fn from_robot(robot: &urdf_rs::Robot, base: BaseKind) -> Result<Model, Multibody
                 ..JointPassive::default()
             };
         }
-        b.joint(spec);
+        joints.push(spec);
     }
-    b.build()
+    Ok(UrdfRobot {
+        name: robot.name.clone(),
+        links,
+        joints,
+    })
 }
 
 #[cfg(test)]
@@ -323,6 +484,60 @@ mod tests {
             from_file(Path::new("/nonexistent/x.urdf"), BaseKind::Fixed),
             Err(MultibodyError::Urdf(_))
         ));
+    }
+
+    /// `<collision>` elements are read as written, in file order: geometry sizes, the default
+    /// mesh scale 1, the origin's rpy as `Rz(y)·Ry(p)·Rx(r)` built independently.
+    #[test]
+    fn collisions_are_read_as_written() {
+        let xml = robot(
+            r#"<link name="a">
+                 <collision><origin xyz="1 2 3" rpy="0.1 0.2 0.3"/><geometry><box size="0.4 0.5 0.6"/></geometry></collision>
+                 <collision><geometry><cylinder radius="0.1" length="0.7"/></geometry></collision>
+                 <collision><geometry><sphere radius="0.25"/></geometry></collision>
+                 <collision><geometry><mesh filename="m/part.obj"/></geometry></collision>
+                 <collision><geometry><mesh filename="p.obj" scale="1 2 3"/></geometry></collision>
+               </link><link name="b"/>"#,
+        );
+        let r = read_str(&xml).unwrap();
+        assert_eq!(r.roots(), ["a", "b"]);
+        let c = &r.links[0].collisions;
+        let geometries: Vec<&UrdfGeometry> = c.iter().map(|c| &c.geometry).collect();
+        assert_eq!(
+            geometries,
+            [
+                &UrdfGeometry::Box {
+                    size: [0.4, 0.5, 0.6]
+                },
+                &UrdfGeometry::Cylinder {
+                    radius: 0.1,
+                    length: 0.7
+                },
+                &UrdfGeometry::Sphere { radius: 0.25 },
+                &UrdfGeometry::Mesh {
+                    filename: "m/part.obj".into(),
+                    scale: [1.0; 3]
+                },
+                &UrdfGeometry::Mesh {
+                    filename: "p.obj".into(),
+                    scale: [1.0, 2.0, 3.0]
+                },
+            ]
+        );
+        let want =
+            DMat3::from_rotation_z(0.3) * DMat3::from_rotation_y(0.2) * DMat3::from_rotation_x(0.1);
+        let got = c[0].origin.rotation_matrix();
+        assert!(
+            (got - want)
+                .abs()
+                .to_cols_array()
+                .iter()
+                .all(|x| *x < 1e-15),
+            "{got} {want}"
+        );
+        assert_eq!(c[0].origin.translation, DVec3::new(1.0, 2.0, 3.0));
+        assert_eq!(c[1].origin, Pose::IDENTITY);
+        assert!(r.links[1].collisions.is_empty());
     }
 
     /// The bundled fixture: a double pendulum whose mass matrix matches the closed form.

@@ -398,3 +398,128 @@ fn random_mutations_never_panic() {
     // Both outcomes must occur, or the mutations are not exercising anything.
     assert!(ok > 0 && errors > 0, "ok {ok}, errors {errors}");
 }
+
+/// The URDF every URDF mutation starts from: the bundled two-link arm (every collision kind,
+/// a fixed joint, `<dynamics>`), read through a scene with overrides and a controller.
+const VALID_URDF: &str = include_str!("../../../fixtures/urdf/two_link_arm.urdf");
+
+/// The scene around it (`urdf/arm.urdf` relative to the scene's directory).
+const URDF_SCENE: &str = r#"Scene(
+    duration: 0.05,
+    bodies: [
+        Body(name: "floor", shape: Box(half_extents: (1.5, 1.5, 0.05)), position: (0.0, 0.0, -0.05), motion: Fixed),
+        Body(name: "block", shape: Box(half_extents: (0.04, 0.04, 0.04)), position: (0.45, 0.0, 0.04), mass: Density(600.0)),
+    ],
+    multibodies: [
+        Multibody(name: "arm", position: (0.0, 0.0, 0.01),
+            urdf: Urdf(path: "urdf/arm.urdf",
+                links: [LinkOverride(name: "hand", material: "steel")],
+                joints: [JointOverride(name: "elbow", q: 0.3, qd: -1.0, limit: Limit(lower: -2.0, upper: 2.0))]),
+            controllers: [Pd(joint: "shoulder", kp: 1.0, kv: 0.05, rate: 100.0)]),
+    ],
+)"#;
+
+/// Random mutations of the URDF file of a scene's multibody: numbers replaced by hostile
+/// values, characters deleted, lines dropped, joint types, shapes, mesh formats and link
+/// names swapped (loops, several roots, unsupported joints and formats). Every outcome is
+/// `Ok` or an error; a panic fails the test.
+#[test]
+fn random_urdf_mutations_never_panic() {
+    const MUTATIONS: usize = 300;
+    const HOSTILE: [&str; 12] = [
+        "NaN", "inf", "-inf", "-1.0", "0.0", "1e308", "-1e308", "1e-320", "5e-324", "1e30", "-0.0",
+        "3",
+    ];
+    const SWAPS: [(&str, &str); 10] = [
+        ("\"revolute\"", "\"planar\""),
+        ("\"revolute\"", "\"floating\""),
+        ("\"revolute\"", "\"prismatic\""),
+        ("\"fixed\"", "\"continuous\""),
+        ("<box", "<capsule radius=\"0.1\" length=\"0.2\"/><box"),
+        ("cube20.obj", "cube20.dae"),
+        ("cube20.obj", "nowhere.obj"),
+        ("child link=\"hand\"", "child link=\"upper\""),
+        ("parent link=\"pedestal\"", "parent link=\"hand\""),
+        ("child link=\"forearm\"", "child link=\"pedestal\""),
+    ];
+    let dir = std::env::temp_dir().join(format!("impulse-hostile-urdf-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("urdf")).unwrap();
+    std::fs::create_dir_all(dir.join("meshes")).unwrap();
+    std::fs::write(
+        dir.join("meshes/cube20.obj"),
+        include_str!("../../../fixtures/meshes/cube20.obj"),
+    )
+    .unwrap();
+    let run = |urdf: &str| -> Result<(), SimError> {
+        std::fs::write(dir.join("urdf/arm.urdf"), urdf).map_err(|e| SimError::Io {
+            path: dir.clone(),
+            message: e.to_string(),
+        })?;
+        let desc = SceneDesc::from_ron(URDF_SCENE, "hostile-urdf")?;
+        let mut world = World::from_scene(&Scene::new(desc, &dir))?;
+        world.step_until(0.02).map(|_| ())
+    };
+    run(VALID_URDF).unwrap();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(1313);
+    let numbers: Vec<(usize, usize)> = {
+        let bytes = VALID_URDF.as_bytes();
+        let mut spans = Vec::new();
+        let mut k = 0;
+        while k < bytes.len() {
+            if bytes[k].is_ascii_digit() && k > 0 && matches!(bytes[k - 1], b'"' | b' ') {
+                let s = k;
+                while k < bytes.len()
+                    && (bytes[k].is_ascii_digit() || matches!(bytes[k], b'.' | b'e' | b'-'))
+                {
+                    k += 1;
+                }
+                spans.push((s, k));
+            } else {
+                k += 1;
+            }
+        }
+        spans
+    };
+    let (mut ok, mut errors) = (0, 0);
+    for _ in 0..MUTATIONS {
+        let mut text = VALID_URDF.to_string();
+        for _ in 0..rng.random_range(1..4) {
+            match rng.random_range(0..4) {
+                0 => {
+                    let (s, e) = numbers[rng.random_range(0..numbers.len())];
+                    if e <= text.len() && text.is_char_boundary(s) && text.is_char_boundary(e) {
+                        text.replace_range(s..e, HOSTILE[rng.random_range(0..HOSTILE.len())]);
+                    }
+                }
+                1 => {
+                    let k = rng.random_range(0..text.len());
+                    if text.is_char_boundary(k) && text.is_char_boundary(k + 1) {
+                        text.remove(k);
+                    }
+                }
+                2 => {
+                    let (from, to) = SWAPS[rng.random_range(0..SWAPS.len())];
+                    text = text.replacen(from, to, 1);
+                }
+                _ => {
+                    let lines: Vec<&str> = text.lines().collect();
+                    let drop = rng.random_range(0..lines.len());
+                    text = lines
+                        .iter()
+                        .enumerate()
+                        .filter(|(i, _)| *i != drop)
+                        .map(|(_, l)| *l)
+                        .collect::<Vec<_>>()
+                        .join("\n");
+                }
+            }
+        }
+        match run(&text) {
+            Ok(()) => ok += 1,
+            Err(_) => errors += 1,
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    eprintln!("{MUTATIONS} mutated URDF files: {ok} ran, {errors} refused with an error");
+    assert!(ok > 0 && errors > 0, "ok {ok}, errors {errors}");
+}

@@ -42,8 +42,8 @@ mod multibody;
 
 pub use controllers::{GoalDesc, WorldControllerDesc};
 pub use multibody::{
-    BaseDesc, ControllerDesc, InertiaDesc, JointDesc, JointKindDesc, LimitDesc, LinkDesc,
-    MultibodyDesc,
+    BaseDesc, ControllerDesc, InertiaDesc, JointDesc, JointKindDesc, JointOverride, LimitDesc,
+    LinkDesc, LinkOverride, MultibodyDesc, URDF_CYLINDER_SIDES, UrdfDesc,
 };
 
 /// A whole scene.

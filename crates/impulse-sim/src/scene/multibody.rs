@@ -17,6 +17,17 @@
 //!     ],
 //! )
 //! ```
+//!
+//! Or from a URDF file with overrides ([`UrdfDesc`], `docs/urdf.md`):
+//!
+//! ```ron
+//! Multibody(
+//!     name: "arm",
+//!     urdf: Urdf(path: "../urdf/two_link_arm.urdf",
+//!                joints: [JointOverride(name: "shoulder", q: 0.5, damping: 0.01)]),
+//!     position: (0.0, 0.0, 1.0),
+//! )
+//! ```
 
 use std::path::Path;
 
@@ -24,7 +35,7 @@ use glam::{DMat3, DQuat, DVec3};
 use impulse_geom::{Pose, SpatialInertia};
 use impulse_multibody::{
     AdaptiveRk4, BaseKind, Integrator, JointLimit, JointPassive, JointPd, JointPid, JointSpec,
-    ModelBuilder, Simulation,
+    JointType, ModelBuilder, Simulation,
 };
 use serde::{Deserialize, Serialize};
 
@@ -32,6 +43,11 @@ use super::{MassDesc, RotationDesc, ShapeDesc, check_rotation, check_shape, fini
 use crate::build::rotation;
 use crate::error::SimError;
 use crate::world::LinkShape;
+
+mod stl;
+mod urdf;
+
+pub use urdf::{JointOverride, LinkOverride, URDF_CYLINDER_SIDES, UrdfDesc};
 
 fn default_material() -> String {
     "default".to_string()
@@ -215,9 +231,15 @@ pub struct MultibodyDesc {
     /// Initial angular velocity of a floating root link (world, rad/s).
     #[serde(default)]
     pub angular_velocity: [f64; 3],
-    /// The links; the first is the root.
+    /// A URDF file the links and joints are read from, with overrides by name (`None`: the
+    /// multibody is all inline).
+    #[serde(default)]
+    pub urdf: Option<UrdfDesc>,
+    /// The links; the first is the root. With `urdf`, links added to the file's (attached by
+    /// `joints`; the file's root stays the root).
+    #[serde(default)]
     pub links: Vec<LinkDesc>,
-    /// The joints (each child's inboard joint).
+    /// The joints (each child's inboard joint); with `urdf`, joints added to the file's.
     #[serde(default)]
     pub joints: Vec<JointDesc>,
     /// Joint controllers.
@@ -233,13 +255,18 @@ fn default_tolerance() -> f64 {
 }
 
 impl MultibodyDesc {
-    /// Builds the multibody's simulation and its links' shapes, in gravity `gravity`; shapes
-    /// from OBJ files resolve against `base_dir`.
+    /// Builds the multibody's simulation and its links' shapes, in gravity `gravity`; a URDF
+    /// file and shapes from OBJ files resolve against `base_dir` (a URDF's meshes against the
+    /// URDF's directory). A fixed root's shape is placed at `position`/`rotation` (its link
+    /// frame is the world's; the placement is folded into its joints).
     ///
     /// # Errors
     /// [`SimError::Invalid`] or [`SimError::Geometry`] naming the multibody and the link,
     /// joint or controller that is wrong (an unknown parent, a loop, a zero-mass link with
-    /// children, non-finite numbers, NaN gains, a controller on a missing joint).
+    /// children, non-finite numbers, NaN gains, a controller on a missing joint), and for a
+    /// URDF multibody the file, link, joint or override at fault (an unreadable or malformed
+    /// file, a link with two parents, no single root, an unsupported joint, collision geometry
+    /// or mesh format, an override naming nothing in the file).
     pub fn build(
         &self,
         gravity: DVec3,
@@ -254,10 +281,10 @@ impl MultibodyDesc {
         if self.name.is_empty() {
             return Err(bad("name".into(), "is empty".into()));
         }
-        if self.links.is_empty() {
+        if self.links.is_empty() && self.urdf.is_none() {
             return Err(bad(
                 "links".into(),
-                "a multibody needs at least one link".into(),
+                "a multibody needs at least one link (or a `urdf` file)".into(),
             ));
         }
         finite3(&self.position).map_err(|p| bad("position".into(), p))?;
@@ -270,76 +297,59 @@ impl MultibodyDesc {
             BaseDesc::Floating => BaseKind::Floating,
         };
         let placement = Pose::new(rotation(&self.rotation), DVec3::from_array(self.position));
-        let mut b = ModelBuilder::new(base);
-        b.gravity(gravity);
-        let mut shapes = Vec::new();
+        let mut parts = match &self.urdf {
+            Some(u) => urdf::parts(u, base_dir).map_err(|(f, p)| bad(f, p))?,
+            None => Parts {
+                root: self.links[0].name.clone(),
+                ..Parts::default()
+            },
+        };
         for (k, l) in self.links.iter().enumerate() {
             let field = |f: &str| format!("links[{k}] \"{}\".{f}", l.name);
             let (inertia, shape) = link_mass(l, base_dir).map_err(|(f, p)| bad(field(&f), p))?;
-            b.link(&l.name, inertia);
-            if let Some(s) = shape {
+            parts.links.push(PartLink {
+                name: l.name.clone(),
+                inertia,
+                shape,
+                material: l.material.clone(),
+            });
+        }
+        for (k, j) in self.joints.iter().enumerate() {
+            let field = |f: &str| format!("joints[{k}] \"{}\".{f}", j.name);
+            parts
+                .joints
+                .push(inline_joint(j).map_err(|(f, p)| bad(field(f), p))?);
+        }
+        let mut b = ModelBuilder::new(base);
+        b.gravity(gravity);
+        let mut shapes = Vec::new();
+        for l in parts.links {
+            b.link(&l.name, l.inertia);
+            if let Some(mut s) = l.shape {
+                if base == BaseKind::Fixed && l.name == parts.root {
+                    // A fixed root's link frame is the world's (the placement is folded
+                    // into its joints below), so its shape is placed here.
+                    s = place(&s, placement);
+                }
                 shapes.push(LinkShape {
-                    link: l.name.clone(),
+                    link: l.name,
                     shape: s,
-                    material: l.material.clone(),
+                    material: l.material,
                 });
             }
         }
         let mut q_joints = Vec::new();
         let mut v_joints = Vec::new();
-        let root = &self.links[0].name;
-        for (k, j) in self.joints.iter().enumerate() {
-            let field = |f: &str| format!("joints[{k}] \"{}\".{f}", j.name);
-            finite3(&j.position).map_err(|p| bad(field("position"), p))?;
-            check_rotation(&j.rotation).map_err(|p| bad(field("rotation"), p))?;
-            finite3(&j.axis).map_err(|p| bad(field("axis"), p))?;
-            for (f, x) in [
-                ("q", j.q),
-                ("qd", j.qd),
-                ("damping", j.damping),
-                ("friction", j.friction),
-            ] {
-                if !x.is_finite() {
-                    return Err(bad(field(f), format!("{x} is not finite")));
-                }
-            }
-            let mut origin = Pose::new(rotation(&j.rotation), DVec3::from_array(j.position));
-            if base == BaseKind::Fixed && &j.parent == root {
+        for mut j in parts.joints {
+            if base == BaseKind::Fixed && j.spec.parent == parts.root {
                 // A fixed root's frame is the multibody's placement in the world.
-                origin = placement * origin;
+                j.spec.origin = placement * j.spec.origin;
             }
-            let axis = DVec3::from_array(j.axis);
-            let mut spec = match j.kind {
-                JointKindDesc::Revolute => {
-                    JointSpec::revolute(&j.name, &j.parent, &j.child, origin, axis)
-                }
-                JointKindDesc::Prismatic => {
-                    JointSpec::prismatic(&j.name, &j.parent, &j.child, origin, axis)
-                }
-                JointKindDesc::Fixed => JointSpec::fixed(&j.name, &j.parent, &j.child, origin),
-            };
-            let (stiffness, rest) = j.spring.unwrap_or((0.0, 0.0));
-            if !(stiffness.is_finite() && rest.is_finite()) {
-                return Err(bad(
-                    field("spring"),
-                    format!("({stiffness}, {rest}) is not finite"),
-                ));
-            }
-            spec = spec.with_passive(JointPassive {
-                stiffness,
-                rest,
-                damping: j.damping,
-                friction: j.friction,
-                ..JointPassive::default()
-            });
-            if let Some(lim) = j.limit {
-                spec = spec.with_limit(JointLimit::new(lim.lower, lim.upper, lim.restitution));
-            }
-            if j.kind != JointKindDesc::Fixed {
-                q_joints.push((j.name.clone(), j.q));
+            if !matches!(j.spec.joint_type, JointType::Fixed) {
+                q_joints.push((j.spec.name.clone(), j.q));
                 v_joints.push(j.qd);
             }
-            b.joint(spec);
+            b.joint(j.spec);
         }
         let model = b.build().map_err(|e| bad("joints".into(), e.to_string()))?;
         // Joint coordinates in the model's order (depth first from the root).
@@ -464,6 +474,99 @@ impl MultibodyDesc {
     }
 }
 
+/// The links and joints a multibody's model is built from, from its URDF file and inline.
+#[derive(Default)]
+struct Parts {
+    links: Vec<PartLink>,
+    joints: Vec<PartJoint>,
+    /// The root link's name.
+    root: String,
+}
+
+/// A link as the model and the world receive it.
+struct PartLink {
+    name: String,
+    /// Spatial inertia in the link frame.
+    inertia: SpatialInertia,
+    /// Collision shape in the link frame.
+    shape: Option<ShapeDesc>,
+    material: String,
+}
+
+/// A joint as the model receives it, with its initial state.
+struct PartJoint {
+    spec: JointSpec,
+    q: f64,
+    qd: f64,
+}
+
+/// An inline joint's spec and initial state; `(field, problem)` on error.
+fn inline_joint(j: &JointDesc) -> Result<PartJoint, (&'static str, String)> {
+    finite3(&j.position).map_err(|p| ("position", p))?;
+    check_rotation(&j.rotation).map_err(|p| ("rotation", p))?;
+    finite3(&j.axis).map_err(|p| ("axis", p))?;
+    for (f, x) in [
+        ("q", j.q),
+        ("qd", j.qd),
+        ("damping", j.damping),
+        ("friction", j.friction),
+    ] {
+        if !x.is_finite() {
+            return Err((f, format!("{x} is not finite")));
+        }
+    }
+    let origin = Pose::new(rotation(&j.rotation), DVec3::from_array(j.position));
+    let axis = DVec3::from_array(j.axis);
+    let mut spec = match j.kind {
+        JointKindDesc::Revolute => JointSpec::revolute(&j.name, &j.parent, &j.child, origin, axis),
+        JointKindDesc::Prismatic => {
+            JointSpec::prismatic(&j.name, &j.parent, &j.child, origin, axis)
+        }
+        JointKindDesc::Fixed => JointSpec::fixed(&j.name, &j.parent, &j.child, origin),
+    };
+    let (stiffness, rest) = j.spring.unwrap_or((0.0, 0.0));
+    if !(stiffness.is_finite() && rest.is_finite()) {
+        return Err(("spring", format!("({stiffness}, {rest}) is not finite")));
+    }
+    spec = spec.with_passive(JointPassive {
+        stiffness,
+        rest,
+        damping: j.damping,
+        friction: j.friction,
+        ..JointPassive::default()
+    });
+    if let Some(lim) = j.limit {
+        spec = spec.with_limit(JointLimit::new(lim.lower, lim.upper, lim.restitution));
+    }
+    Ok(PartJoint {
+        spec,
+        q: j.q,
+        qd: j.qd,
+    })
+}
+
+/// A compound's parts moved by `pose` (other shapes are returned as they are: a link's
+/// placed shape is always a compound).
+fn place(s: &ShapeDesc, pose: Pose) -> ShapeDesc {
+    match s {
+        ShapeDesc::Compound { parts } => ShapeDesc::Compound {
+            parts: parts
+                .iter()
+                .map(|p| {
+                    let at = pose * Pose::new(rotation(&p.rotation), DVec3::from_array(p.position));
+                    let r: DQuat = at.rotation;
+                    super::PartDesc {
+                        shape: p.shape.clone(),
+                        position: at.translation.to_array(),
+                        rotation: RotationDesc::Quaternion(r.x, r.y, r.z, r.w),
+                    }
+                })
+                .collect(),
+        },
+        other => other.clone(),
+    }
+}
+
 /// A link's spatial inertia (link frame) and collision shape (link frame), from its shape and
 /// mass or its explicit inertia; `(field, problem)` on error.
 fn link_mass(
@@ -482,21 +585,10 @@ fn link_mass(
             rotation: l.rotation,
         };
         match s {
-            ShapeDesc::Compound { parts } => ShapeDesc::Compound {
-                parts: parts
-                    .iter()
-                    .map(|p| {
-                        let pose = Pose::new(rotation(&l.rotation), DVec3::from_array(l.position))
-                            * Pose::new(rotation(&p.rotation), DVec3::from_array(p.position));
-                        let r: DQuat = pose.rotation;
-                        super::PartDesc {
-                            shape: p.shape.clone(),
-                            position: pose.translation.to_array(),
-                            rotation: RotationDesc::Quaternion(r.x, r.y, r.z, r.w),
-                        }
-                    })
-                    .collect(),
-            },
+            ShapeDesc::Compound { .. } => place(
+                s,
+                Pose::new(rotation(&l.rotation), DVec3::from_array(l.position)),
+            ),
             other => ShapeDesc::Compound {
                 parts: vec![moved(other)],
             },
