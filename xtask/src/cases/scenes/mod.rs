@@ -15,6 +15,7 @@
 //! - `rattleback.rs`: V12, with the reversing direction predicted from the body's
 //!   inertia–curvature skew before the run;
 //! - `hybrid.rs`: V19 triple pendulum (multibodies in the world, §7.2);
+//! - `sorter.rs`: V21 part sorter (spring-loaded trap doors routing three part types, §7.2);
 //! - `perturb.rs` (tests): each case fails when its scene is perturbed in the way it guards
 //!   against.
 
@@ -25,6 +26,7 @@ mod perturb;
 mod rattleback;
 mod resting;
 mod sliding;
+mod sorter;
 
 use std::path::{Path, PathBuf};
 
@@ -80,6 +82,7 @@ pub fn scene_checks() -> Vec<SceneCheck> {
     all.extend(sliding::checks());
     all.extend(rattleback::checks());
     all.extend(hybrid::checks());
+    all.extend(sorter::checks());
     all
 }
 
