@@ -104,11 +104,13 @@ impl Door {
     }
 
     /// Whether a part whose centre of mass is at `p` (and whose circumscribed radius about it
-    /// is `radius`) lies over the closed door's face: along it, across it, and above it by
-    /// at most its radius.
-    fn carries(&self, p: DVec3, radius: f64) -> bool {
+    /// is `radius`) has come to the closed door: it may touch the door's face (its centre
+    /// no farther upstream of the hinge than its radius, not past the free edge, across the
+    /// door, above the door's plane by at most its radius). The frame before, no part of it
+    /// can have been on the door.
+    fn reached_by(&self, p: DVec3, radius: f64) -> bool {
         let l = self.frame.inverse() * (p - self.hinge);
-        (0.0..=self.length).contains(&l.x)
+        (-radius..=self.length).contains(&l.x)
             && l.y.abs() <= self.half_width
             && l.z > 0.0
             && l.z <= radius
@@ -142,8 +144,8 @@ fn in_bin(bin: &BodyDesc, p: DVec3, radius: f64) -> Result<bool, String> {
 }
 
 /// V21. Per part: the bin it ends in (its index in [`ROUTES`], −1 for none) against its
-/// route. Per door: the largest hinge angle at the frame before each part comes onto it and
-/// at the end, over the closed tolerance. The monitor's penetration, and the 1- and
+/// route. Per door: the largest hinge angle at the frame before each part comes to it (see
+/// [`Door::reached_by`]) and at the end, over the closed tolerance. The monitor's penetration, and the 1- and
 /// 2-thread hashes of the first [`DETERMINISM_SPAN`] seconds.
 fn v21_part_sorter(r: &Run<'_>) -> Result<Vec<Metric>, String> {
     let last = r.last()?;
@@ -186,7 +188,7 @@ fn v21_part_sorter(r: &Run<'_>) -> Result<Vec<Metric>, String> {
                 .rec
                 .frames
                 .iter()
-                .position(|f| door.carries(f.bodies[i].com, radius));
+                .position(|f| door.reached_by(f.bodies[i].com, radius));
             if let Some(n) = first {
                 arrivals[d] += 1;
                 let before = &r.rec.frames[n.saturating_sub(1)];
