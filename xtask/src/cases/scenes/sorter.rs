@@ -20,7 +20,7 @@ use crate::validate::case::{Check, Metric};
 /// the scene, its floor) it must end in. The one place the routes are stated: type A glides
 /// over door 1 into bin A; type B falls through door 1 onto the lower track and glides over
 /// door 2 into bin B; type C falls through both doors into bin C.
-pub(super) const ROUTES: [(&str, &str); 3] = [
+const ROUTES: [(&str, &str); 3] = [
     ("part A", "bin A"),
     ("part B", "bin B"),
     ("part C", "bin C"),
@@ -144,9 +144,10 @@ fn in_bin(bin: &BodyDesc, p: DVec3, radius: f64) -> Result<bool, String> {
 }
 
 /// V21. Per part: the bin it ends in (its index in [`ROUTES`], −1 for none) against its
-/// route. Per door: the largest hinge angle at the frame before each part comes to it (see
-/// [`Door::reached_by`]) and at the end, over the closed tolerance. The monitor's penetration, and the 1- and
-/// 2-thread hashes of the first [`DETERMINISM_SPAN`] seconds.
+/// route. Per door: how many parts came to it, and the largest hinge angle at the frame
+/// before each part came to it (see [`Door::reached_by`]) and at the end, over the closed
+/// tolerance. The monitor's penetration, and the 1- and 2-thread hashes of the first
+/// [`DETERMINISM_SPAN`] seconds.
 fn v21_part_sorter(r: &Run<'_>) -> Result<Vec<Metric>, String> {
     let last = r.last()?;
     let bins: Vec<&BodyDesc> = ROUTES
