@@ -14,34 +14,47 @@ use crate::validate::case::{Check, Metric};
 /// against a ball, a little off the lowest pose).
 const V19_REST_ENERGY_REL: f64 = 0.02;
 
-/// Determinism on the hybrid scenes: each is run for this long (s) on 1 and on 2 threads
+/// Determinism on the hybrid scenes: each is run for this long (s) on 1 and on 2 threads,
 /// (its first events: landings, link contacts, controller updates; the whole of every
 /// scene would cost several minutes of the suite).
-const DETERMINISM_SPAN: f64 = 1.0;
+const DETERMINISM_SPAN: f64 = 0.5;
 
-/// Determinism: every hybrid scene (one with multibodies or high-level controllers) run on 1
-/// and on 2 threads, every step through the pool, gives bit-identical trajectories.
+/// Determinism: every hybrid scene (one with multibodies or high-level controllers), in both
+/// contact models, run on 1 and on 2 threads, every step through the pool, gives
+/// bit-identical trajectories.
 pub(super) fn determinism() -> Result<Vec<Metric>, String> {
     let mut metrics = Vec::new();
     for check in super::scene_checks() {
-        let scene = super::load_scene(check.scene)?;
-        if scene.desc.multibodies.is_empty() && scene.desc.controllers.is_empty() {
+        let bundled = super::load_scene(check.scene)?;
+        if bundled.desc.multibodies.is_empty() && bundled.desc.controllers.is_empty() {
             continue;
         }
-        let mut hashes = Vec::new();
-        for threads in [1, 2] {
-            let mut world = impulse_sim::World::from_scene(&scene).map_err(|e| e.to_string())?;
-            world.set_threads(threads).map_err(|e| e.to_string())?;
-            world.set_parallel_min_bodies(0);
-            let span = DETERMINISM_SPAN.min(super::duration(&scene)?);
-            let rec = impulse_sim::run(&mut world, span, scene.desc.output_rate, |_| {})
-                .map_err(|e| e.to_string())?;
-            hashes.push(rec.hash());
+        for mode in [None, Some(impulse_sim::ContactMode::Impulse)] {
+            let mut scene = bundled.clone();
+            if let Some(mode) = mode {
+                scene.desc.contact_model = mode;
+            }
+            let mut hashes = Vec::new();
+            for threads in [1, 2] {
+                let mut world =
+                    impulse_sim::World::from_scene(&scene).map_err(|e| e.to_string())?;
+                world.set_threads(threads).map_err(|e| e.to_string())?;
+                world.set_parallel_min_bodies(0);
+                let span = DETERMINISM_SPAN.min(super::duration(&scene)?);
+                let rec = impulse_sim::run(&mut world, span, scene.desc.output_rate, |_| {})
+                    .map_err(|e| e.to_string())?;
+                hashes.push(rec.hash());
+            }
+            let suffix = if mode.is_some() {
+                super::IMPULSE_SUFFIX
+            } else {
+                ""
+            };
+            metrics.push(super::holds(
+                &format!("{}{suffix}_hash_1_thread_equals_2_threads", check.scene),
+                hashes[0] == hashes[1],
+            ));
         }
-        metrics.push(super::holds(
-            &format!("{}_hash_1_thread_equals_2_threads", check.scene),
-            hashes[0] == hashes[1],
-        ));
     }
     Ok(metrics)
 }

@@ -17,6 +17,7 @@
 //! - `hybrid.rs`: V19 triple pendulum, V20 see-saw, the furniture scene's controllers
 //!   (multibodies and controllers in the world, §7.2–7.3), determinism of every hybrid scene;
 //! - `rover.rs`: the rover driven by a high-level state machine (§7.3's creature war);
+//! - `sorter.rs`: V21 part sorter (spring-loaded trap doors routing three part types, §7.2);
 //! - `perturb.rs` (tests): each case fails when its scene is perturbed in the way it guards
 //!   against.
 
@@ -28,6 +29,7 @@ mod rattleback;
 mod resting;
 mod rover;
 mod sliding;
+mod sorter;
 
 use std::path::{Path, PathBuf};
 
@@ -83,6 +85,7 @@ pub fn scene_checks() -> Vec<SceneCheck> {
     all.extend(sliding::checks());
     all.extend(rattleback::checks());
     all.extend(hybrid::checks());
+    all.extend(sorter::checks());
     all
 }
 
@@ -129,7 +132,7 @@ pub fn cases() -> Vec<Case> {
     });
     cases.push(Case {
         name: "determinism-hybrid",
-        description: "every hybrid scene (multibodies or controllers) run for its first second on 1 and on 2 threads: bit-identical trajectories (hash)",
+        description: "every hybrid scene (multibodies or controllers), in both contact models, run for its first half second on 1 and on 2 threads: bit-identical trajectories (hash)",
         run: Box::new(hybrid::determinism),
     });
     cases

@@ -244,3 +244,44 @@ fn v20_fails_when_the_see_saw_cannot_tip() {
         });
     });
 }
+
+/// The spring (stiffness, rest angle) of the named door of the part sorter.
+fn door_spring<'a>(d: &'a mut SceneDesc, door: &str) -> &'a mut Option<(f64, f64)> {
+    &mut d
+        .multibodies
+        .iter_mut()
+        .find(|m| m.name == door)
+        .expect("a door of the scene")
+        .joints[0]
+        .spring
+}
+
+/// V21 guards the routing by the door springs: door 1's spring doubled doubles its preload
+/// (0.0292 → 0.0584 N·m), above the largest moment part B can put on it (0.0553 N·m with the
+/// flap's own weight), so B rides over door 1 into bin A instead of falling through. (Run in
+/// the switching model as bundled: in the pure impulse model this perturbed scene stops at
+/// 1.47 s with door 2's stop stalling under part C — a simulator problem, `docs/hybrid.md`,
+/// V21.)
+#[test]
+fn v21_fails_when_door_1_spring_is_doubled() {
+    fails("V21-part-sorter", "part_B_bin", |d| {
+        let spring = door_spring(d, "door 1");
+        let (k, rest) = spring.expect("door 1 has a spring");
+        *spring = Some((2.0 * k, rest));
+    });
+}
+
+/// V21 guards the doors' closing: door 2's spring with its rest angle at the closed stop has
+/// no preload, so the flap's own weight holds it open (w/k = 0.0063/0.043 = 0.15 rad) when
+/// the first part comes to it; the closed-door check must see it. (Run for 2 s, by when part
+/// C has met door 2; pure impulse model.)
+#[test]
+fn v21_fails_when_door_2_is_not_held_shut() {
+    fails("V21-part-sorter", "door_2_angle_when_met_over_tol", |d| {
+        d.contact_model = impulse_sim::ContactMode::Impulse;
+        d.duration = Some(2.0);
+        let spring = door_spring(d, "door 2");
+        let (k, _) = spring.expect("door 2 has a spring");
+        *spring = Some((k, 0.0));
+    });
+}
