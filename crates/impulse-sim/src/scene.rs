@@ -469,10 +469,20 @@ impl SceneDesc {
             self.default_contact.restitution,
         )
         .map_err(|(f, p)| scene(&format!("default_contact.{f}"), p))?;
+        // Materials of bodies and of multibodies' links (inline, or a URDF's overrides): a
+        // contact pair may name any of them.
         let mut materials: Vec<&str> = vec!["default"];
-        for b in &self.bodies {
-            if !materials.contains(&b.material.as_str()) {
-                materials.push(&b.material);
+        let links = self.multibodies.iter().flat_map(|m| {
+            let inline = m.links.iter().map(|l| l.material.as_str());
+            let overrides = m
+                .urdf
+                .iter()
+                .flat_map(|u| u.links.iter().filter_map(|l| l.material.as_deref()));
+            inline.chain(overrides)
+        });
+        for m in self.bodies.iter().map(|b| b.material.as_str()).chain(links) {
+            if !materials.contains(&m) {
+                materials.push(m);
             }
         }
         for (k, c) in self.contacts.iter().enumerate() {
@@ -487,7 +497,7 @@ impl SceneDesc {
                     return Err(SimError::Invalid {
                         what,
                         field: field.into(),
-                        problem: format!("no body uses material \"{m}\""),
+                        problem: format!("no body or link uses material \"{m}\""),
                     });
                 }
             }

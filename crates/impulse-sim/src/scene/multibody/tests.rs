@@ -67,3 +67,33 @@ fn a_wheel_velocity_loop_reaches_its_speed_or_warns_that_it_cannot() {
             .any(|w| w.contains("\"spin\"") && w.contains("unstable"))
     );
 }
+
+/// A contact pair may name a material only a multibody's link uses (the rover's rubber
+/// wheels on the floor); one nobody uses is still refused, naming it.
+#[test]
+fn contact_pairs_may_name_the_materials_of_links() {
+    let scene = |pair: &str| {
+        format!(
+            r#"Scene(
+                contacts: [MaterialPair(a: "{pair}", b: "default", friction: 1.0, restitution: 0.1)],
+                bodies: [Body(name: "floor", motion: Fixed, shape: Box(half_extents: (1, 1, 0.1)),
+                              position: (0, 0, -0.1))],
+                multibodies: [Multibody(name: "wheel", base: Fixed, position: (0, 0, 0.5), links: [
+                    Link(name: "axle"),
+                    Link(name: "wheel", shape: Some(Sphere(radius: 0.06)), mass: Some(Mass(0.3)),
+                         material: "rubber"),
+                ], joints: [
+                    Joint(name: "spin", kind: Revolute, parent: "axle", child: "wheel",
+                          axis: (0.0, 1.0, 0.0)),
+                ])],
+            )"#
+        )
+    };
+    SceneDesc::from_ron(&scene("rubber"), "test")
+        .and_then(|d| d.validate())
+        .expect("rubber is a link's material");
+    let err = SceneDesc::from_ron(&scene("felt"), "test")
+        .and_then(|d| d.validate())
+        .expect_err("nobody uses felt");
+    assert!(err.to_string().contains("\"felt\""), "{err}");
+}
