@@ -73,7 +73,7 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         format_of(out)?;
     }
     let mut world = World::from_scene(&scene).map_err(|e| e.to_string())?;
-    for w in scene.desc.warnings() {
+    for w in scene.warnings() {
         eprintln!("warning: {w}");
     }
     if let Some(n) = args.threads {

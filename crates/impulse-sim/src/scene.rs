@@ -673,8 +673,17 @@ impl SceneDesc {
     /// bodies given a mass or density (a steel ball of density 7800 dropped on boxes given no
     /// mass meets boxes 7800 times lighter per volume). Each is one sentence naming the body
     /// or field.
+    ///
+    /// Relative URDF paths of multibodies resolve against the current directory: use
+    /// [`Scene::warnings`] for a scene read from a file.
     #[must_use]
     pub fn warnings(&self) -> Vec<String> {
+        self.warnings_in(Path::new("."))
+    }
+
+    /// [`SceneDesc::warnings`], with relative paths (URDF files) resolved against `base_dir`.
+    #[must_use]
+    pub fn warnings_in(&self, base_dir: &Path) -> Vec<String> {
         let mut out = Vec::new();
         let dynamic = || {
             self.bodies
@@ -716,7 +725,7 @@ impl SceneDesc {
             }
         }
         for m in &self.multibodies {
-            out.extend(m.warnings(DVec3::from_array(self.gravity)));
+            out.extend(m.warnings(DVec3::from_array(self.gravity), base_dir));
         }
         out
     }
@@ -768,6 +777,13 @@ fn with_hint(text: &str, e: &ron::error::SpannedError) -> String {
 }
 
 impl Scene {
+    /// [`SceneDesc::warnings`] of the scene, its relative paths resolved against its
+    /// directory (a multibody read from a URDF file is checked too).
+    #[must_use]
+    pub fn warnings(&self) -> Vec<String> {
+        self.desc.warnings_in(&self.base_dir)
+    }
+
     /// Reads and parses a scene file (not yet validated).
     ///
     /// # Errors

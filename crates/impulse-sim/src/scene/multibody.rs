@@ -434,9 +434,10 @@ impl MultibodyDesc {
     /// velocity gain, at its rate, is near or past the stability limit of a zero-order-held
     /// loop on its joint's effective inertia at the initial pose (thesis §5.4: controllers at
     /// finite rates). Nothing for a multibody that does not build (its error says why).
+    /// `base_dir` resolves a URDF path, as [`MultibodyDesc::build`] does.
     #[must_use]
-    pub fn warnings(&self, gravity: DVec3) -> Vec<String> {
-        let Ok((sim, _)) = self.build(gravity, Path::new(".")) else {
+    pub fn warnings(&self, gravity: DVec3, base_dir: &Path) -> Vec<String> {
+        let Ok((sim, _)) = self.build(gravity, base_dir) else {
             return Vec::new();
         };
         let model = sim.model();

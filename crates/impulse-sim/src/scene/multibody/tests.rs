@@ -54,7 +54,7 @@ fn a_wheel_velocity_loop_reaches_its_speed_or_warns_that_it_cannot() {
         } else {
             assert!(err > 1e3, "r = {r}: should diverge, error {err}");
         }
-        let warned = !desc.warnings(g).is_empty();
+        let warned = !desc.warnings(g, Path::new(".")).is_empty();
         assert_eq!(warned, r >= 2.0 * CONTROL_STABILITY_WARN, "r = {r}");
     }
     // Scene warnings include them.
@@ -96,4 +96,25 @@ fn contact_pairs_may_name_the_materials_of_links() {
         .and_then(|d| d.validate())
         .expect_err("nobody uses felt");
     assert!(err.to_string().contains("\"felt\""), "{err}");
+}
+
+/// A scene read from a file warns about a URDF multibody's controller too: its relative URDF
+/// path resolves against the scene's directory (`Scene::warnings`). The bundled URDF arm with
+/// its elbow loop's k_v raised a thousandfold.
+#[test]
+fn a_urdf_multibody_in_a_scene_file_is_checked_for_controller_stability() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/scenes/urdf-arm.ron");
+    let mut scene = crate::Scene::read(&path).expect("the bundled URDF arm");
+    let mb = &mut scene.desc.multibodies[0];
+    assert!(mb.urdf.is_some(), "the arm comes from a URDF file");
+    assert!(scene.warnings().is_empty(), "{:?}", scene.warnings());
+    for c in &mut scene.desc.multibodies[0].controllers {
+        let (ControllerDesc::Pd { kv, .. } | ControllerDesc::Pid { kv, .. }) = c;
+        *kv *= 1000.0;
+    }
+    let warnings = scene.warnings();
+    assert!(
+        warnings.iter().any(|w| w.contains("unstable")),
+        "{warnings:?}"
+    );
 }
