@@ -41,8 +41,12 @@
 //! - recording at a fixed frame rate, trajectory hashes, CSV and JSON ([`record`]);
 //! - collisions of multibody links with rigid bodies, fixed bodies and other multibodies'
 //!   links (thesis §5.3: K from the impulse-space articulated-body recursion, the impulse from
-//!   `impulse-response`, propagation through the tree) ([`articulated`]). Multibodies are not
-//!   yet members of a [`World`] (issue 13).
+//!   `impulse-response`, propagation through the tree) ([`articulated`]); multibodies as
+//!   members of a [`World`] (`World::add_multibody`, `multibodies` in scene files, inline or
+//!   from URDF files: integrated to the heap's top with checked predictions, thesis §5.2);
+//! - high-level controllers called at their own rate with the world to read and commands to
+//!   give (`World::add_controller`, [`WorldController`]), and the built-in steering and
+//!   launching of the furniture scene ([`controllers`]).
 //!
 //! **Must not know** command lines, terminals or plotting: those belong to `impulse-cli`.
 #![forbid(unsafe_code)]
