@@ -128,6 +128,12 @@ impl LinkMotion {
         self.origin
     }
 
+    /// The reference point's acceleration now (m/s², gravity included).
+    #[must_use]
+    pub fn acceleration(&self) -> DVec3 {
+        self.acceleration
+    }
+
     /// TOI coefficients (thesis §5.2.2): `A = ½ (a·d̂ + r ‖α‖ ‖d̂‖)`, `B = v·d̂ + r ‖ω‖ ‖d̂‖`
     /// (the α term is ours: [`LinkMotion::with_angular_acceleration`]), each padded by
     /// [`LINK_TOI_PADDING`] of its magnitude; with seen speeds, `A ≥ 0` and `B` at least the

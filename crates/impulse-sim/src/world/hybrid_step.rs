@@ -33,14 +33,22 @@ use crate::error::SimError;
 /// motion seen, so a second redo is rare; the cap guards the loop. Default `16`.
 pub const MAX_STEP_REDOS: u32 = 16;
 
-/// How far (fraction of ε_c) a link's recorded states may leave the box predicted for it
-/// before its step is redone. The states are recorded at every derivative evaluation, and a
-/// Runge–Kutta stage state is an extrapolation off the true path by up to about ½·|a|·h²
-/// (a wheel bouncing on microcollisions, near the top of each hop, left its padded box by
-/// 3e-10 m at ε_c = 1e-4 at most steps: 57 663 box violations and 34 201 redone steps in
-/// 3 s of a rover driving). The box the broad phase holds is grown by ε_c, so pairs within ε_c
-/// are still found. Default `0.01`.
+/// How far a link's recorded states may leave the box predicted for it before its step is
+/// redone, at least (fraction of ε_c). The states are recorded at every derivative
+/// evaluation, and a Runge–Kutta stage state is an extrapolation off the true path by up to
+/// about ½·|a|·h² (a wheel bouncing on microcollisions, near the top of each hop, left its
+/// padded box by 3e-10 m at ε_c = 1e-4 at most steps: 57 663 box violations and 34 201
+/// redone steps in 3 s of a rover driving). The allowance is that bound for the step, at
+/// least this fraction of ε_c and at most [`BOX_STAGE_MAX_FRACTION`] of it. Default `0.01`.
 pub const BOX_STAGE_FRACTION: f64 = 0.01;
+
+/// The largest allowance of [`BOX_STAGE_FRACTION`]'s kind (fraction of ε_c): the box the
+/// broad phase holds is grown by ε_c on every body, so a link outside its box by less than
+/// half of it is still found close to every body within ε_c. Default `0.5`.
+pub const BOX_STAGE_MAX_FRACTION: f64 = 0.5;
+
+/// Padding of the acceleration in the stage allowance (dimensionless), as the box pads it.
+const LINK_STAGE_PADDING: f64 = 1.1;
 
 /// Rounding allowance of a slack check, relative to the travel compared (dimensionless):
 /// the accumulated travel and the allowance are sums of a few products. Default `1e-9`.
@@ -232,11 +240,21 @@ impl World {
             for (mi, (_, travel, _)) in trials.iter().enumerate() {
                 for &(id, slot) in &self.multibodies[mi].links {
                     let t = &travel[id.index()];
-                    let predicted = self
-                        .b(slot)
-                        .motion(g)
-                        .swept_com_aabb(self.box_span)
-                        .expanded(BOX_STAGE_FRACTION * self.collision_epsilon());
+                    let motion = self.b(slot).motion(g);
+                    let eps = self.collision_epsilon();
+                    // The stage states' error for this step: ½·|a|·h², padded as the box is.
+                    let stage = match motion {
+                        Motion::Link(m) => {
+                            0.5 * LINK_STAGE_PADDING
+                                * m.acceleration().length()
+                                * self.box_span.powi(2)
+                        }
+                        _ => 0.0,
+                    };
+                    let allowance = stage
+                        .max(BOX_STAGE_FRACTION * eps)
+                        .min(BOX_STAGE_MAX_FRACTION * eps);
+                    let predicted = motion.swept_com_aabb(self.box_span).expanded(allowance);
                     let boxed = predicted.contains_point(t.origin_min)
                         && predicted.contains_point(t.origin_max);
                     let slacked = self.heap.pairs_of(slot).all(|p| {
