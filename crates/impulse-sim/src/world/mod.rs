@@ -64,7 +64,9 @@ use rustc_hash::FxHashMap;
 pub use api::{Load, LoadFn};
 pub use control::{Control, ControllerHandle, WorldController, WorldControllerClone};
 pub use hybrid::{LinkShape, MultibodyHandle};
-pub use hybrid_step::{BOX_STAGE_FRACTION, MAX_STEP_REDOS, SLACK_ROUNDING_REL};
+pub use hybrid_step::{
+    BOX_STAGE_FRACTION, BOX_STAGE_MAX_FRACTION, MAX_STEP_REDOS, SLACK_ROUNDING_REL,
+};
 pub use materials::Material;
 pub use profile::Profile;
 
