@@ -38,6 +38,30 @@ fn tight() -> Integrator {
     })
 }
 
+/// A 2 kg wheel of inertia `i_axle` about its axle (z), on a revolute joint to a fixed
+/// chassis, without gravity, at rest.
+fn wheel(i_axle: f64) -> Simulation {
+    let mut b = ModelBuilder::new(BaseKind::Fixed);
+    b.gravity(DVec3::ZERO)
+        .link("chassis", SpatialInertia::ZERO)
+        .link(
+            "wheel",
+            SpatialInertia::new(
+                2.0,
+                DVec3::ZERO,
+                DMat3::from_diagonal(DVec3::new(0.03, 0.03, i_axle)),
+            ),
+        )
+        .joint(JointSpec::revolute(
+            "axle",
+            "chassis",
+            "wheel",
+            Pose::IDENTITY,
+            DVec3::Z,
+        ));
+    Simulation::new(b.build().unwrap(), vec![0.0], vec![0.0], tight()).unwrap()
+}
+
 /// PD at 1 kHz holding a prismatic joint that carries m·g settles at `q_des − m g / k_p`
 /// (thesis §5.4.1); PID at the same rate removes the offset.
 #[test]
@@ -378,25 +402,7 @@ fn controllers_that_do_not_fit_the_model_are_refused_naming_the_joint() {
 #[test]
 fn a_pd_velocity_loop_drives_a_wheel_to_its_commanded_speed_along_the_held_torques() {
     let (i_axle, kv, h, w_des) = (0.05, 0.4, 1e-2, 12.0);
-    let mut b = ModelBuilder::new(BaseKind::Fixed);
-    b.gravity(DVec3::ZERO)
-        .link("chassis", SpatialInertia::ZERO)
-        .link(
-            "wheel",
-            SpatialInertia::new(
-                2.0,
-                DVec3::ZERO,
-                DMat3::from_diagonal(DVec3::new(0.03, 0.03, i_axle)),
-            ),
-        )
-        .joint(JointSpec::revolute(
-            "axle",
-            "chassis",
-            "wheel",
-            Pose::IDENTITY,
-            DVec3::Z,
-        ));
-    let mut sim = Simulation::new(b.build().unwrap(), vec![0.0], vec![0.0], tight()).unwrap();
+    let mut sim = wheel(i_axle);
     let mut pd = JointPd::new(0, 0.0, kv, h);
     pd.qd_des = w_des;
     sim.add_controller(Box::new(pd)).unwrap();
@@ -423,25 +429,7 @@ fn a_pd_velocity_loop_drives_a_wheel_to_its_commanded_speed_along_the_held_torqu
 #[test]
 fn joint_targets_set_later_reach_every_pd_and_pid_on_the_joint() {
     let (i_axle, kv, h, w_des) = (0.05, 0.4, 1e-2, -7.0);
-    let mut b = ModelBuilder::new(BaseKind::Fixed);
-    b.gravity(DVec3::ZERO)
-        .link("chassis", SpatialInertia::ZERO)
-        .link(
-            "wheel",
-            SpatialInertia::new(
-                2.0,
-                DVec3::ZERO,
-                DMat3::from_diagonal(DVec3::new(0.03, 0.03, i_axle)),
-            ),
-        )
-        .joint(JointSpec::revolute(
-            "axle",
-            "chassis",
-            "wheel",
-            Pose::IDENTITY,
-            DVec3::Z,
-        ));
-    let mut sim = Simulation::new(b.build().unwrap(), vec![0.0], vec![0.0], tight()).unwrap();
+    let mut sim = wheel(i_axle);
     sim.add_controller(Box::new(JointPd::new(0, 0.0, kv, h)))
         .unwrap();
     sim.add_controller(Box::new(JointPid::new(0, 0.0, kv, 0.0, h)))
