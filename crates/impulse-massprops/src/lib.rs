@@ -6,7 +6,11 @@
 //!   theorem to closed-form edge sums, all in one pass over the faces ([`integrals`]);
 //! - [`MassProperties`]: mass, centre of mass and inertia tensor about the centre of mass, from
 //!   a mesh with a density or a mass, from exact formulas (sphere, box), from point masses, and
-//!   for compound bodies (sum of parts); and the principal frame ([`PrincipalFrame`]).
+//!   for compound bodies (sum of parts); and the principal frame ([`PrincipalFrame`]);
+//! - [`PoseAnalysis`]: a part's stable resting poses on a plane from its convex hull and centre
+//!   of mass, and the quasi-static and perturbed quasi-static estimates of how often it comes
+//!   to rest in each (thesis §7.5, eq. 7.1; [`poses`]); [`stats`]: the error metric and
+//!   sample sizes of pose statistics (eqs. 7.2, 7.3).
 //!
 //! **Must not know** about bodies, poses over time, collisions, simulation or scene files. It
 //! uses `impulse-geom` for meshes and poses and faer for the symmetric eigendecomposition.
@@ -15,9 +19,12 @@
 #![forbid(unsafe_code)]
 
 pub mod integrals;
+pub mod poses;
 mod properties;
+pub mod stats;
 
 pub use integrals::VolumeIntegrals;
+pub use poses::{PoseAnalysis, RestingFacet};
 pub use properties::{MassProperties, PrincipalFrame};
 
 use impulse_geom::GeomError;
@@ -47,6 +54,29 @@ pub enum MassError {
     /// A compound body has no parts.
     #[error("a compound body needs at least one part")]
     EmptyCompound,
+    /// A part's centre of mass is not inside its convex hull (pose analysis,
+    /// [`poses::PoseAnalysis::new`]).
+    #[error(
+        "the centre of mass ({}, {}, {}) is not inside the part's convex hull: it lies {distance:e} outside the plane of face {face}",
+        com[0], com[1], com[2]
+    )]
+    ComOutsideHull {
+        /// The centre of mass (part frame).
+        com: [f64; 3],
+        /// A hull face it is not inside.
+        face: u32,
+        /// Its signed distance beyond that face's plane (≥ 0 up to the tolerance).
+        distance: f64,
+    },
+    /// A statistic's argument is out of its domain (a probability outside (0, 1), counts
+    /// that do not match).
+    #[error("invalid {name}: {reason}")]
+    InvalidStatistic {
+        /// The argument.
+        name: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
     /// The symmetric eigensolver did not converge (only possible for non-finite input).
     #[error("the eigendecomposition of the inertia tensor failed to converge")]
     Eigen,
