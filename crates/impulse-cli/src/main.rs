@@ -18,6 +18,7 @@
 #![forbid(unsafe_code)]
 
 mod dynamics;
+mod poses;
 mod reduce;
 mod run;
 
@@ -70,6 +71,10 @@ enum Command {
         #[arg(long)]
         profile: bool,
     },
+    /// How often a part comes to rest in each stable pose when dropped on a belt (thesis
+    /// §7.5): quasi-static, perturbed quasi-static and dynamic estimates side by side, from
+    /// drops run in parallel or in shards (`--shard K/N`, then `impulse poses merge`).
+    Poses(poses::PosesArgs),
     /// Exact mass properties of a closed polygon mesh (Wavefront OBJ), printed as JSON.
     ///
     /// The mesh must be closed and consistently oriented with faces counter-clockwise seen
@@ -191,6 +196,7 @@ fn main() -> ExitCode {
         } => massprops(mesh, *density, *mass),
         Command::Dynamics(args) => dynamics::run(args),
         Command::Reduce(args) => reduce::run(args),
+        Command::Poses(args) => poses::run(args),
     };
     match result {
         Ok(text) => {

@@ -59,6 +59,7 @@ pub mod contact;
 pub mod controllers;
 mod error;
 pub mod monitor;
+pub mod poses;
 pub mod record;
 pub mod scene;
 pub mod sustained;

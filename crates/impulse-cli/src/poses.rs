@@ -1,0 +1,309 @@
+//! `impulse poses`: how often a part comes to rest in each stable pose (thesis §7.5): the
+//! quasi-static, perturbed quasi-static and dynamic estimates side by side, from drops run in
+//! parallel and, for a batch scheduler, in shards (`--shard K/N`, then `impulse poses merge`).
+
+use std::fmt::Write as _;
+use std::io::IsTerminal as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use impulse_sim::poses::{self, DropSettings, PosePart, Shard, StudyFile};
+
+/// Options of `impulse poses`.
+#[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct PosesArgs {
+    #[command(subcommand)]
+    command: Option<PosesCommand>,
+    /// The part: a `.ron` part file (`Part(name, shape, mass)`) or a convex `.obj` mesh; see
+    /// fixtures/parts/.
+    part: Option<PathBuf>,
+    /// Number of drops of the whole study (all shards).
+    #[arg(long, default_value_t = 2000)]
+    drops: u64,
+    /// Height of the part's lowest point above the belt at release (m).
+    #[arg(long, default_value_t = DropSettings::default().height)]
+    height: f64,
+    /// Horizontal speed at release (m/s).
+    #[arg(long, default_value_t = DropSettings::default().exit_speed)]
+    exit_speed: f64,
+    /// Coulomb friction between part and belt.
+    #[arg(long, default_value_t = DropSettings::default().friction)]
+    friction: f64,
+    /// Restitution between part and belt.
+    #[arg(long, default_value_t = DropSettings::default().restitution)]
+    restitution: f64,
+    /// Collision epsilon ε_c (m); default 1e-3 of the part's diameter.
+    #[arg(long)]
+    epsilon: Option<f64>,
+    /// Largest tilt of a belt drop's start away from its rest pose (degrees).
+    #[arg(long, default_value_t = DropSettings::default().jitter_degrees)]
+    jitter: f64,
+    /// Every drop starts uniform on SO(3): no belt drops, no belt-fed estimate.
+    #[arg(long)]
+    uniform_only: bool,
+    /// A drop not at rest after this long (simulated s) is counted as unsettled.
+    #[arg(long, default_value_t = DropSettings::default().max_time)]
+    max_time: f64,
+    /// Random seed: drop i's start depends only on (seed, i).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Worker threads (default: every core). Results do not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Run only drops K, K+N, K+2N, … (K in 0…N−1), for a batch scheduler; combine the
+    /// shards' `--out` files with `impulse poses merge`.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// Write every drop's outcome to this JSON file (the input of `merge` and `--from`).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Summarise the drops of this JSON file (a run's or a merge's `--out`) instead of
+    /// dropping.
+    #[arg(long, conflicts_with_all = ["shard", "out"])]
+    from: Option<PathBuf>,
+    /// Half-angle of the perturbed quasi-static estimate's cone (degrees; the thesis used 20).
+    #[arg(long, default_value_t = 20.0)]
+    cone: f64,
+    /// Confidence level of the intervals.
+    #[arg(long, default_value_t = 0.95)]
+    confidence: f64,
+}
+
+#[derive(clap::Subcommand)]
+enum PosesCommand {
+    /// Combine the `--out` files of the shards of one study into the file of the whole
+    /// study (equal, byte for byte, to the file of the unsharded run).
+    Merge {
+        /// The shard files.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// The merged file.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+/// Runs `impulse poses`; returns the text to print.
+pub fn run(args: &PosesArgs) -> Result<String, String> {
+    if let Some(PosesCommand::Merge { files, out }) = &args.command {
+        return merge(files, out);
+    }
+    let part_path = args
+        .part
+        .as_deref()
+        .ok_or("a part file is needed: `impulse poses PART.ron` (or `impulse poses merge …`)")?;
+    let part = PosePart::load(part_path).map_err(|e| e.to_string())?;
+    let settings = DropSettings {
+        height: args.height,
+        exit_speed: args.exit_speed,
+        friction: args.friction,
+        restitution: args.restitution,
+        collision_epsilon: args.epsilon,
+        belt_fed: !args.uniform_only,
+        jitter_degrees: args.jitter,
+        max_time: args.max_time,
+    };
+    settings.validate().map_err(|e| e.to_string())?;
+    if !(args.cone.is_finite() && (0.0..90.0).contains(&args.cone)) {
+        return Err(format!("--cone {}: must be in [0, 90) degrees", args.cone));
+    }
+    if !(args.confidence > 0.0 && args.confidence < 1.0) {
+        return Err(format!(
+            "--confidence {}: must be in (0, 1)",
+            args.confidence
+        ));
+    }
+    let shard = match &args.shard {
+        Some(s) => s.parse::<Shard>().map_err(|e| format!("--shard: {e}"))?,
+        None => Shard::ALL,
+    };
+    let started = Instant::now();
+    let (file, ran) = match &args.from {
+        Some(path) => (read_study(path)?, false),
+        None => {
+            if args.drops == 0 {
+                return Err("--drops 0: a study needs at least one drop".into());
+            }
+            let threads = args
+                .threads
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            let mine = (0..args.drops).filter(|&i| shard.owns(i)).count() as u64;
+            let tty = std::io::stderr().is_terminal();
+            let progress = |done: u64| {
+                if tty && (done == mine || done % 10 == 0) {
+                    eprint!("\r{done}/{mine} drops");
+                    if done == mine {
+                        eprintln!();
+                    }
+                }
+            };
+            let outcomes = poses::run_drops(
+                &part, &settings, args.seed, args.drops, shard, threads, &progress,
+            )
+            .map_err(|e| e.to_string())?;
+            let file = StudyFile {
+                part: part.name.clone(),
+                settings,
+                seed: args.seed,
+                drops: args.drops,
+                outcomes,
+            };
+            if let Some(out) = &args.out {
+                write_study(out, &file)?;
+            }
+            (file, true)
+        }
+    };
+    if file.part != part.name {
+        return Err(format!(
+            "{}: its drops are of part \"{}\", not \"{}\"",
+            args.from.as_deref().unwrap_or(Path::new("")).display(),
+            file.part,
+            part.name
+        ));
+    }
+    let wall = started.elapsed().as_secs_f64();
+    let summary = poses::summarize(
+        &part,
+        &file.outcomes,
+        args.cone.to_radians(),
+        args.confidence,
+    )
+    .map_err(|e| e.to_string())?;
+    let mut t = String::new();
+    let a = &part.analysis;
+    let _ = writeln!(
+        t,
+        "part:             {} ({} hull facets, {} stable)",
+        part.name,
+        a.facets().len(),
+        a.stable().len()
+    );
+    let _ = writeln!(
+        t,
+        "drops:            {} of {} (seed {}{}), {} uniform on SO(3), {} from rest on the belt",
+        summary.drops,
+        file.drops,
+        file.seed,
+        if shard == Shard::ALL {
+            String::new()
+        } else {
+            format!(", shard {}/{}", shard.index, shard.count)
+        },
+        summary.uniform_drops,
+        summary.drops - summary.uniform_drops
+    );
+    if ran {
+        let _ = writeln!(
+            t,
+            "wall time:        {wall:.2} s ({:.1} drops per second)",
+            summary.drops as f64 / wall.max(1e-9)
+        );
+    }
+    let pct = |x: f64| {
+        if x.is_finite() {
+            format!("{:6.2} %", 100.0 * x)
+        } else {
+            "     –  ".into()
+        }
+    };
+    let _ = writeln!(
+        t,
+        "\npose  normal (part frame)        quasi-static  perturbed({:.0}°)  uniform   {:.0} % interval      belt-fed  drops",
+        args.cone,
+        100.0 * args.confidence
+    );
+    for r in &summary.rows {
+        let _ = writeln!(
+            t,
+            "{:>4}  ({:>6.3}, {:>6.3}, {:>6.3})  {}      {}         {}  [{:5.1}, {:5.1}] %   {}  {:>5}",
+            r.pose,
+            r.normal[0],
+            r.normal[1],
+            r.normal[2],
+            pct(r.quasi_static),
+            pct(r.perturbed),
+            pct(r.uniform),
+            100.0 * r.interval.0,
+            100.0 * r.interval.1,
+            r.belt_fed.map_or_else(|| "     –  ".into(), pct),
+            r.uniform_count
+        );
+    }
+    if let Some(h) = summary.half_width {
+        let _ = writeln!(
+            t,
+            "\nuniform drops: every interval within ±{:.2} % (worst case, eq. 7.3); {} drops give ±5 % at {:.0} %",
+            100.0 * h,
+            impulse_massprops::stats::sample_size(0.05, args.confidence)
+                .map_err(|e| e.to_string())?,
+            100.0 * args.confidence
+        );
+    }
+    let changes: u64 = summary
+        .transitions
+        .iter()
+        .enumerate()
+        .map(|(a, row)| {
+            row.iter()
+                .enumerate()
+                .filter(|(b, _)| *b != a)
+                .map(|(_, c)| c)
+                .sum::<u64>()
+        })
+        .sum();
+    if summary.drops > summary.uniform_drops {
+        let _ = writeln!(
+            t,
+            "belt drops: {changes} of {} changed pose; the belt-fed estimate is only as good as those changes",
+            summary.drops - summary.uniform_drops
+        );
+    }
+    let _ = write!(
+        t,
+        "not classified: {} unsettled after {} s, {} at rest off every facet",
+        summary.unsettled, file.settings.max_time, summary.unclassified
+    );
+    if let Some(out) = &args.out {
+        let _ = write!(t, "\noutcomes:         {}", out.display());
+    }
+    Ok(t)
+}
+
+fn read_study(path: &Path) -> Result<StudyFile, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    serde_json::from_str(&text)
+        .map_err(|e| format!("{}: not a pose study file: {e}", path.display()))
+}
+
+fn write_study(path: &Path, file: &StudyFile) -> Result<(), String> {
+    let text = serde_json::to_string_pretty(file).map_err(|e| e.to_string())?;
+    std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+fn merge(files: &[PathBuf], out: &Path) -> Result<String, String> {
+    let studies = files
+        .iter()
+        .map(|f| read_study(f))
+        .collect::<Result<Vec<_>, _>>()?;
+    let merged = poses::merge(&studies).map_err(|e| e.to_string())?;
+    write_study(out, &merged)?;
+    let have = merged.outcomes.len() as u64;
+    let mut t = format!(
+        "merged {} files: {have} of {} drops of \"{}\" into {}",
+        files.len(),
+        merged.drops,
+        merged.part,
+        out.display()
+    );
+    if have < merged.drops {
+        let _ = write!(
+            t,
+            "\nwarning: {} drops are missing (a shard not merged?)",
+            merged.drops - have
+        );
+    }
+    Ok(t)
+}

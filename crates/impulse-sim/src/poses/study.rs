@@ -1,0 +1,628 @@
+//! The drops of a pose study, their summary per stable pose, and merging shard files (see
+//! the module documentation of [`crate::poses`]).
+
+use std::str::FromStr;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::{DQuat, DVec3};
+use impulse_massprops::stats;
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::{EPSILON_REL, FACET_ANGLE, PosePart, REST_POLL};
+use crate::SimError;
+use crate::scene::{BodyDesc, MotionDesc, ShapeDesc};
+use crate::world::{BodyHandle, Material, World, WorldSettings};
+
+/// The belt reaches this many part diameters from the drop point, plus the distance the exit
+/// velocity carries the part in [`DropSettings::max_time`]: far enough that no part leaves it.
+const BELT_REACH_DIAMETERS: f64 = 20.0;
+
+/// SplitMix64's increment (the golden ratio in 64 bits), to mix a seed with a drop index.
+const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// Settings of a drop (thesis §7.5's values are the defaults).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DropSettings {
+    /// Height of the part's lowest point above the belt at release (m). Default `0.12`.
+    pub height: f64,
+    /// Horizontal speed at release, along x (m/s). Default `0.05`.
+    pub exit_speed: f64,
+    /// Coulomb friction between part and belt. Default `0.3`.
+    pub friction: f64,
+    /// Restitution between part and belt. Default `0.3`.
+    pub restitution: f64,
+    /// Collision epsilon ε_c (m); `None`: [`EPSILON_REL`] of the part's diameter.
+    pub collision_epsilon: Option<f64>,
+    /// Whether every other drop starts at rest on a stable facet (the upper belt) rather than
+    /// uniform on SO(3), for the belt-fed estimate. Default `true`.
+    pub belt_fed: bool,
+    /// Largest tilt of a belt drop's start away from its rest pose (degrees; belt
+    /// vibration). Default `1.5`.
+    pub jitter_degrees: f64,
+    /// A drop not at rest after this long (s) is counted as unsettled. Default `10`.
+    pub max_time: f64,
+}
+
+impl Default for DropSettings {
+    fn default() -> Self {
+        Self {
+            height: 0.12,
+            exit_speed: 0.05,
+            friction: 0.3,
+            restitution: 0.3,
+            collision_epsilon: None,
+            belt_fed: true,
+            jitter_degrees: 1.5,
+            max_time: 10.0,
+        }
+    }
+}
+
+impl DropSettings {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the field.
+    pub fn validate(&self) -> Result<(), SimError> {
+        let bad = |field: &str, problem: String| SimError::Invalid {
+            what: "drop settings".into(),
+            field: field.into(),
+            problem,
+        };
+        let nonneg = |field: &str, x: f64| {
+            if x.is_finite() && x >= 0.0 {
+                Ok(())
+            } else {
+                Err(bad(field, format!("{x} must be finite and ≥ 0")))
+            }
+        };
+        nonneg("height", self.height)?;
+        nonneg("exit_speed", self.exit_speed)?;
+        nonneg("jitter_degrees", self.jitter_degrees)?;
+        Material {
+            friction: self.friction,
+            restitution: self.restitution,
+        }
+        .validate()
+        .map_err(|p| bad("friction/restitution", p))?;
+        if let Some(eps) = self.collision_epsilon
+            && !(eps.is_finite() && eps > 0.0)
+        {
+            return Err(bad(
+                "collision_epsilon",
+                format!("{eps} must be finite and > 0"),
+            ));
+        }
+        if !(self.max_time.is_finite() && self.max_time > 0.0) {
+            return Err(bad(
+                "max_time",
+                format!("{} must be finite and > 0", self.max_time),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One shard of a study: drops `index`, `index + count`, `index + 2·count`, …
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, 0 ≤ index < count.
+    pub index: u64,
+    /// Number of shards, ≥ 1.
+    pub count: u64,
+}
+
+impl Shard {
+    /// The whole study in one shard.
+    pub const ALL: Shard = Shard { index: 0, count: 1 };
+
+    /// Whether drop `i` is this shard's.
+    pub fn owns(&self, i: u64) -> bool {
+        i % self.count == self.index
+    }
+}
+
+impl FromStr for Shard {
+    type Err = String;
+
+    /// Parses `K/N` with 0 ≤ K < N.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (k, n) = s
+            .split_once('/')
+            .ok_or_else(|| format!("shard `{s}`: expected K/N, e.g. 0/4"))?;
+        let parse = |x: &str, what: &str| {
+            x.trim()
+                .parse::<u64>()
+                .map_err(|e| format!("shard `{s}`: {what} `{x}`: {e}"))
+        };
+        let (index, count) = (parse(k, "K")?, parse(n, "N")?);
+        if count == 0 || index >= count {
+            return Err(format!(
+                "shard `{s}`: need 0 ≤ K < N (the shards of N are 0/N … {}/N)",
+                count.max(1) - 1
+            ));
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// What became of one drop.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DropOutcome {
+    /// The drop's index in the study.
+    pub index: u64,
+    /// The stable facet (hull face) the drop started at rest on (a belt drop); `None` for a
+    /// start uniform on SO(3).
+    pub start: Option<u32>,
+    /// The hull face the part rests on; `None` when it did not settle on a facet.
+    pub facet: Option<u32>,
+    /// Whether the part came to rest (slept) within [`DropSettings::max_time`].
+    pub settled: bool,
+    /// Simulated time until rest, or until the run gave up (s).
+    pub time: f64,
+    /// Final orientation of the part's body frame (world; x, y, z, w).
+    pub rotation: [f64; 4],
+}
+
+/// A study's file: the settings and every drop's outcome, sorted by index. Merged shard files
+/// equal the unsharded run's file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StudyFile {
+    /// The part's name.
+    pub part: String,
+    /// The drop settings.
+    pub settings: DropSettings,
+    /// The random seed.
+    pub seed: u64,
+    /// Number of drops of the whole study (all shards).
+    pub drops: u64,
+    /// Outcomes, sorted by index (one shard's, or all).
+    pub outcomes: Vec<DropOutcome>,
+}
+
+/// SplitMix64's output function: a well-mixed 64-bit value from `x`.
+fn mix(mut x: u64) -> u64 {
+    x = x.wrapping_add(GOLDEN_GAMMA);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+/// The random stream of drop `index` of a study seeded with `seed`.
+fn stream(seed: u64, index: u64) -> Xoshiro256PlusPlus {
+    Xoshiro256PlusPlus::seed_from_u64(mix(seed) ^ mix(index.wrapping_add(GOLDEN_GAMMA)))
+}
+
+/// A rotation uniform on SO(3) (Shoemake 1992).
+pub(super) fn uniform_rotation(rng: &mut Xoshiro256PlusPlus) -> DQuat {
+    let (u1, u2, u3): (f64, f64, f64) = (rng.random(), rng.random(), rng.random());
+    let tau = std::f64::consts::TAU;
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    DQuat::from_xyzw(
+        a * (tau * u2).sin(),
+        a * (tau * u2).cos(),
+        b * (tau * u3).sin(),
+        b * (tau * u3).cos(),
+    )
+    .normalize()
+}
+
+/// A direction uniform on the unit sphere.
+fn uniform_direction(rng: &mut Xoshiro256PlusPlus) -> DVec3 {
+    let z: f64 = rng.random_range(-1.0..=1.0);
+    let phi = std::f64::consts::TAU * rng.random::<f64>();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    DVec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// The world of a drop, with the part somewhere above the belt (placed per drop).
+fn template(part: &PosePart, s: &DropSettings) -> Result<(World, BodyHandle), SimError> {
+    let mut settings =
+        WorldSettings::new(s.collision_epsilon.unwrap_or(EPSILON_REL * part.diameter));
+    settings.default_contact = Material {
+        friction: s.friction,
+        restitution: s.restitution,
+    };
+    settings.base_dir.clone_from(&part.base_dir);
+    let mut world = World::new(settings)?;
+    world.set_parallel_min_bodies(usize::MAX);
+    let reach = BELT_REACH_DIAMETERS * part.diameter + s.exit_speed * s.max_time + s.height;
+    let thick = part.diameter.max(1e-3);
+    world.add_body(
+        &BodyDesc::new(
+            "belt",
+            ShapeDesc::Box {
+                half_extents: [reach, reach, thick],
+            },
+        )
+        .at([0.0, 0.0, -thick])
+        .with_motion(MotionDesc::Fixed),
+    )?;
+    let mut body = part.body.clone();
+    body.position = [0.0, 0.0, s.height + 2.0 * part.diameter];
+    let h = world.add_body(&body)?;
+    Ok((world, h))
+}
+
+/// Runs one drop from the body-frame orientation `start` in a copy of `template`'s world and
+/// returns its outcome.
+fn drop_once(
+    part: &PosePart,
+    s: &DropSettings,
+    template: &(World, BodyHandle),
+    index: u64,
+    (start, from): (DQuat, Option<u32>),
+) -> Result<DropOutcome, SimError> {
+    let (mut world, h) = (template.0.clone(), template.1);
+    let centre = part.centre_at_height(start, s.height);
+    let own = part.own_frame_pose(centre, start);
+    world.set_pose(h, own.translation, own.rotation)?;
+    world.set_velocity(h, DVec3::new(s.exit_speed, 0.0, 0.0), DVec3::ZERO)?;
+    let mut settled = false;
+    while world.time() < s.max_time {
+        let until = (world.time() + REST_POLL).min(s.max_time);
+        world.step_until(until)?;
+        if world.body(h).is_some_and(|b| b.is_asleep()) {
+            settled = true;
+            break;
+        }
+    }
+    let b = world.body(h).ok_or_else(|| SimError::UnknownBody {
+        handle: format!("{h:?}"),
+    })?;
+    let rotation = b.pose.rotation;
+    let down = rotation.inverse() * world.gravity().normalize_or(DVec3::NEG_Z);
+    let facet = if settled {
+        part.analysis.facet_facing(down, FACET_ANGLE)
+    } else {
+        None
+    };
+    Ok(DropOutcome {
+        index,
+        start: from,
+        facet,
+        settled,
+        time: world.time(),
+        rotation: rotation.to_array(),
+    })
+}
+
+/// The start of drop `index`: uniform on SO(3), or (every odd drop of a belt-fed study) at
+/// rest on the stable facets in turn, turned about the vertical at random and tilted by up
+/// to the jitter about a random axis.
+fn start_of(
+    part: &PosePart,
+    s: &DropSettings,
+    stable: &[u32],
+    seed: u64,
+    index: u64,
+) -> (DQuat, Option<u32>) {
+    let mut rng = stream(seed, index);
+    if !s.belt_fed || index % 2 == 0 || stable.is_empty() {
+        return (uniform_rotation(&mut rng), None);
+    }
+    let facet = stable[((index / 2) % stable.len() as u64) as usize];
+    let normal = part.analysis.facets()[facet as usize].normal;
+    let rest = DQuat::from_rotation_arc(normal, DVec3::NEG_Z);
+    let yaw = DQuat::from_rotation_z(std::f64::consts::TAU * rng.random::<f64>());
+    let tilt = DQuat::from_axis_angle(
+        uniform_direction(&mut rng),
+        s.jitter_degrees.to_radians() * rng.random::<f64>(),
+    );
+    ((tilt * yaw * rest).normalize(), Some(facet))
+}
+
+/// Runs the drops of `shard` of a study of `drops` drops (see the module documentation) on
+/// `threads` worker threads, calling `progress` with the number of drops done after each
+/// one. Returns the outcomes, sorted by index. A drop's start depends only on (`seed`, its
+/// index), so the outcomes do not depend on `threads` or on the shard split.
+///
+/// # Errors
+/// [`SimError::Invalid`] for bad settings or zero threads; any error of a drop's world
+/// (named by the drop's index).
+pub fn run_drops(
+    part: &PosePart,
+    settings: &DropSettings,
+    seed: u64,
+    drops: u64,
+    shard: Shard,
+    threads: usize,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<DropOutcome>, SimError> {
+    settings.validate()?;
+    if threads == 0 {
+        return Err(SimError::Invalid {
+            what: "pose study".into(),
+            field: "threads".into(),
+            problem: "need at least one thread".into(),
+        });
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| SimError::Runtime {
+            time: 0.0,
+            message: format!("thread pool: {e}"),
+        })?;
+    // Built once here to report its errors; each worker builds its own copy (a world holds
+    // controllers, which are not shared between threads).
+    template(part, settings)?;
+    let stable = part.analysis.stable();
+    let done = AtomicU64::new(0);
+    let mine: Vec<u64> = (0..drops).filter(|&i| shard.owns(i)).collect();
+    pool.install(|| {
+        mine.into_par_iter()
+            .map_init(
+                || template(part, settings).ok(),
+                |world, i| {
+                    let named = |e: SimError| SimError::Runtime {
+                        time: 0.0,
+                        message: format!("drop {i}: {e}"),
+                    };
+                    let world = world.as_ref().ok_or_else(|| {
+                        named(SimError::Runtime {
+                            time: 0.0,
+                            message: "the drop's world could not be built".into(),
+                        })
+                    })?;
+                    let start = start_of(part, settings, &stable, seed, i);
+                    let out = drop_once(part, settings, world, i, start).map_err(named)?;
+                    progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                    Ok(out)
+                },
+            )
+            .collect()
+    })
+}
+
+/// Power iterations of the belt-fed estimate stop when an iteration changes the estimate by
+/// less than this (sum of absolute changes). Default `1e-13`.
+const BELT_FED_TOLERANCE: f64 = 1e-13;
+
+/// Most power iterations of the belt-fed estimate: a chain that mixes this slowly (a part
+/// that almost never leaves a pose) is reported as it stands. Default `1_000_000`.
+const BELT_FED_MAX_ITERATIONS: usize = 1_000_000;
+
+/// One stable pose's line of a study's summary.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PoseRow {
+    /// Pose number, 1 for the most likely by the quasi-static estimate.
+    pub pose: usize,
+    /// The hull face.
+    pub facet: u32,
+    /// The facet's outward normal in the part's own frame (points down at rest).
+    pub normal: [f64; 3],
+    /// Quasi-static estimate (eq. 7.1).
+    pub quasi_static: f64,
+    /// Perturbed quasi-static estimate.
+    pub perturbed: f64,
+    /// Drops started uniform on SO(3) that came to rest on this facet.
+    pub uniform_count: u64,
+    /// Their fraction of the uniform drops: the dynamic estimate for a uniformly random
+    /// start (what the quasi-static estimates assume).
+    pub uniform: f64,
+    /// The binomial interval of [`Self::uniform`] (low, high).
+    pub interval: (f64, f64),
+    /// The belt-fed dynamic estimate: the long-run share of this pose when each drop starts
+    /// from the pose the last one ended in (the thesis's feedback of final poses to initial
+    /// ones), from the transition frequencies of the belt drops.
+    pub belt_fed: Option<f64>,
+}
+
+/// A study's summary: a row per stable pose, the drops that did not settle on one, and the
+/// belt drops' transition frequencies.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PoseSummary {
+    /// The rows, most likely first (quasi-static).
+    pub rows: Vec<PoseRow>,
+    /// Drops summarised.
+    pub drops: u64,
+    /// Of those, drops started uniform on SO(3).
+    pub uniform_drops: u64,
+    /// Drops not at rest within the time limit.
+    pub unsettled: u64,
+    /// Drops at rest but not on a facet (within [`FACET_ANGLE`]).
+    pub unclassified: u64,
+    /// Confidence level of the intervals.
+    pub confidence: f64,
+    /// Worst-case half-width of the uniform drops' intervals (eq. 7.3).
+    pub half_width: Option<f64>,
+    /// `transitions[a][b]`: belt drops started on the pose of row a that ended on the pose
+    /// of row b.
+    pub transitions: Vec<Vec<u64>>,
+}
+
+/// Summarises `outcomes` of `part`: per stable facet the quasi-static and perturbed
+/// estimates (cone half-angle `cone`, rad), the uniform drops' frequency with its interval at
+/// `confidence`, and the belt-fed estimate.
+///
+/// The belt-fed estimate is the thesis's feedback loop run to its limit: with T the belt
+/// drops' transition frequencies between stable poses (row a: where drops started at rest
+/// on pose a ended), it is lim P₀·T'ᵏ for the lazy chain T' = (I + T)/2 (same long-run
+/// shares as T, without periodicity), P₀ the uniform drops' distribution (the quasi-static
+/// estimate if there are none). For a chain that can reach every pose from every other this
+/// is T's unique stationary distribution, whatever P₀; a pose whose belt drops never leave
+/// it keeps the share that reaches it. `None` without belt drops.
+///
+/// # Errors
+/// [`SimError::Invalid`] for no outcomes, a cone outside [0, π/2), a confidence outside
+/// (0, 1), or an outcome naming a facet that is not a stable facet of the part (a file of
+/// another part).
+pub fn summarize(
+    part: &PosePart,
+    outcomes: &[DropOutcome],
+    cone: f64,
+    confidence: f64,
+) -> Result<PoseSummary, SimError> {
+    let bad = |field: &str, problem: String| SimError::Invalid {
+        what: "pose summary".into(),
+        field: field.into(),
+        problem,
+    };
+    if outcomes.is_empty() {
+        return Err(bad("outcomes", "no drops to summarise".into()));
+    }
+    let qs = part.analysis.quasi_static();
+    let pqs = part
+        .analysis
+        .perturbed_quasi_static(cone)
+        .map_err(|e| bad("cone", e.to_string()))?;
+    let mut stable = part.analysis.stable();
+    stable.sort_by(|a, b| qs[*b as usize].total_cmp(&qs[*a as usize]).then(a.cmp(b)));
+    let row_of = |f: u32, index: u64| {
+        stable.iter().position(|&x| x == f).ok_or_else(|| {
+            bad(
+                "outcomes",
+                format!(
+                    "drop {index}: facet {f} is not a stable facet of {}",
+                    part.name
+                ),
+            )
+        })
+    };
+    let m = stable.len();
+    let mut uniform_counts = vec![0u64; m];
+    let mut transitions = vec![vec![0u64; m]; m];
+    let (mut uniform_drops, mut unsettled, mut unclassified) = (0u64, 0u64, 0u64);
+    for o in outcomes {
+        let end = o.facet.map(|f| row_of(f, o.index)).transpose()?;
+        match (o.start, end) {
+            (None, Some(b)) => uniform_counts[b] += 1,
+            (Some(a), Some(b)) => transitions[row_of(a, o.index)?][b] += 1,
+            (_, None) if !o.settled => unsettled += 1,
+            (_, None) => unclassified += 1,
+        }
+        if o.start.is_none() {
+            uniform_drops += 1;
+        }
+    }
+    let half_width = (uniform_drops > 0)
+        .then(|| stats::worst_half_width(uniform_drops, confidence))
+        .transpose()
+        .map_err(|e| bad("confidence", e.to_string()))?;
+    let belt = transitions
+        .iter()
+        .any(|r| r.iter().any(|&c| c > 0))
+        .then(|| {
+            let start: Vec<f64> = if uniform_drops > 0 {
+                uniform_counts
+                    .iter()
+                    .map(|&c| c as f64 / uniform_drops as f64)
+                    .collect()
+            } else {
+                stable.iter().map(|&f| qs[f as usize]).collect()
+            };
+            belt_fed_limit(&transitions, start)
+        });
+    let rows = stable
+        .iter()
+        .enumerate()
+        .map(|(k, &f)| {
+            let count = uniform_counts[k];
+            let (uniform, interval) = if uniform_drops > 0 {
+                (
+                    count as f64 / uniform_drops as f64,
+                    stats::binomial_interval(count, uniform_drops, confidence)
+                        .map_err(|e| bad("confidence", e.to_string()))?,
+                )
+            } else {
+                (f64::NAN, (f64::NAN, f64::NAN))
+            };
+            Ok(PoseRow {
+                pose: k + 1,
+                facet: f,
+                normal: part.normal_in_part_frame(f).to_array(),
+                quasi_static: qs[f as usize],
+                perturbed: pqs[f as usize],
+                uniform_count: count,
+                uniform,
+                interval,
+                belt_fed: belt.as_ref().map(|p| p[k]),
+            })
+        })
+        .collect::<Result<_, SimError>>()?;
+    Ok(PoseSummary {
+        rows,
+        drops: outcomes.len() as u64,
+        uniform_drops,
+        unsettled,
+        unclassified,
+        confidence,
+        half_width,
+        transitions,
+    })
+}
+
+/// The long-run distribution of the lazy chain (I + T)/2 from `p` (see [`summarize`]); a row
+/// with no drops keeps its share.
+pub(super) fn belt_fed_limit(counts: &[Vec<u64>], mut p: Vec<f64>) -> Vec<f64> {
+    let m = counts.len();
+    let t: Vec<Vec<f64>> = counts
+        .iter()
+        .enumerate()
+        .map(|(a, row)| {
+            let n: u64 = row.iter().sum();
+            (0..m)
+                .map(|b| {
+                    let stay = if a == b { 0.5 } else { 0.0 };
+                    if n == 0 {
+                        2.0 * stay
+                    } else {
+                        stay + 0.5 * row[b] as f64 / n as f64
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    for _ in 0..BELT_FED_MAX_ITERATIONS {
+        let next: Vec<f64> = (0..m)
+            .map(|b| (0..m).map(|a| p[a] * t[a][b]).sum())
+            .collect();
+        let change: f64 = next.iter().zip(&p).map(|(x, y)| (x - y).abs()).sum();
+        p = next;
+        if change < BELT_FED_TOLERANCE {
+            break;
+        }
+    }
+    p
+}
+
+/// Merges shard files of one study into the file of the whole study.
+///
+/// # Errors
+/// [`SimError::Invalid`] when there are no files, the files are of different parts,
+/// settings, seeds or study sizes, or two files hold the same drop.
+pub fn merge(files: &[StudyFile]) -> Result<StudyFile, SimError> {
+    let bad = |problem: String| SimError::Invalid {
+        what: "pose study files".into(),
+        field: "merge".into(),
+        problem,
+    };
+    let first = files
+        .first()
+        .ok_or_else(|| bad("no files to merge".into()))?;
+    for (k, f) in files.iter().enumerate().skip(1) {
+        if (f.part.as_str(), f.settings, f.seed, f.drops)
+            != (first.part.as_str(), first.settings, first.seed, first.drops)
+        {
+            return Err(bad(format!(
+                "file {k} is of another study (part, settings, seed or drops differ from file 0)"
+            )));
+        }
+    }
+    let mut outcomes: Vec<DropOutcome> = files
+        .iter()
+        .flat_map(|f| f.outcomes.iter().copied())
+        .collect();
+    outcomes.sort_by_key(|o| o.index);
+    if let Some(w) = outcomes.windows(2).find(|w| w[0].index == w[1].index) {
+        return Err(bad(format!("drop {} is in two files", w[0].index)));
+    }
+    Ok(StudyFile {
+        outcomes,
+        ..first.clone()
+    })
+}

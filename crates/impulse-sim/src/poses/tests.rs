@@ -1,0 +1,253 @@
+use std::path::Path;
+
+use glam::{DQuat, DVec3};
+use rand::SeedableRng;
+use rand::rngs::Xoshiro256PlusPlus;
+
+use super::study::{belt_fed_limit, uniform_rotation};
+use super::*;
+use crate::scene::{MassDesc, PointMassDesc, ShapeDesc};
+
+fn parts_dir() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/parts")
+}
+
+fn fixture(name: &str) -> PosePart {
+    PosePart::load(&parts_dir().join(name)).unwrap()
+}
+
+fn quick() -> DropSettings {
+    DropSettings {
+        max_time: 3.0,
+        ..DropSettings::default()
+    }
+}
+
+/// A study's outcomes do not depend on the thread count or on the shard split: shards run
+/// apart and merged equal the whole run, field for field.
+#[test]
+fn drops_are_identical_for_any_thread_count_and_shard_split() {
+    let part = fixture("box-1x2x3.ron");
+    let s = quick();
+    let whole = run_drops(&part, &s, 7, 12, Shard::ALL, 1, &|_| {}).unwrap();
+    assert_eq!(whole.len(), 12);
+    assert!(whole.iter().enumerate().all(|(i, o)| o.index == i as u64));
+    assert_eq!(
+        run_drops(&part, &s, 7, 12, Shard::ALL, 2, &|_| {}).unwrap(),
+        whole
+    );
+    let file = |outcomes| StudyFile {
+        part: part.name.clone(),
+        settings: s,
+        seed: 7,
+        drops: 12,
+        outcomes,
+    };
+    let shards: Vec<StudyFile> = [2, 0, 1]
+        .iter()
+        .map(|&k| {
+            file(run_drops(&part, &s, 7, 12, Shard { index: k, count: 3 }, 1, &|_| {}).unwrap())
+        })
+        .collect();
+    assert_eq!(merge(&shards).unwrap(), file(whole.clone()));
+    // A shard merged twice, or a file of another study, is refused.
+    assert!(merge(&[shards[0].clone(), shards[0].clone()]).is_err());
+    let mut other = shards[1].clone();
+    other.seed = 8;
+    assert!(merge(&[shards[0].clone(), other]).is_err());
+    // Another seed gives other drops.
+    assert_ne!(
+        run_drops(&part, &s, 8, 12, Shard::ALL, 1, &|_| {}).unwrap(),
+        whole
+    );
+}
+
+/// A part set down at rest on a stable facet (no drop, no tilt, no push) stays on it: every
+/// belt drop ends where it started, and it is found at rest, not at the time limit.
+#[test]
+fn a_part_set_down_on_a_stable_facet_stays_on_it() {
+    for name in ["box-1x2x3.ron", "cube.ron"] {
+        let part = fixture(name);
+        let s = DropSettings {
+            height: 0.0,
+            exit_speed: 0.0,
+            jitter_degrees: 0.0,
+            ..quick()
+        };
+        let stable = part.analysis.stable().len() as u64;
+        let out = run_drops(&part, &s, 3, 2 * stable, Shard::ALL, 2, &|_| {}).unwrap();
+        for o in out.iter().filter(|o| o.start.is_some()) {
+            assert!(
+                o.settled,
+                "{name}: drop {} did not come to rest in {} s",
+                o.index, o.time
+            );
+            assert_eq!(o.facet, o.start, "{name}: drop {}", o.index);
+        }
+        assert_eq!(
+            out.iter().filter(|o| o.start.is_some()).count() as u64,
+            stable,
+            "one belt drop per stable facet"
+        );
+    }
+}
+
+/// Shoemake's rotations are uniform on SO(3): a body axis turned by them is uniform on the
+/// sphere, so its z component is uniform on [−1, 1] (Archimedes) and its mean is zero; 20 000
+/// samples in 10 bins, each within 5 standard deviations of 2000.
+#[test]
+fn uniform_starts_cover_the_sphere_evenly() {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+    let n = 20_000;
+    let mut bins = [0usize; 10];
+    let mut mean = DVec3::ZERO;
+    for _ in 0..n {
+        let q: DQuat = uniform_rotation(&mut rng);
+        assert!((q.length() - 1.0).abs() < 1e-12);
+        let v = q * DVec3::new(0.3, -0.5, 0.81).normalize();
+        bins[(((v.z + 1.0) / 2.0 * 10.0) as usize).min(9)] += 1;
+        mean += v / n as f64;
+    }
+    let expect = n as f64 / 10.0;
+    let sd = (n as f64 * 0.1 * 0.9).sqrt();
+    for (k, &b) in bins.iter().enumerate() {
+        assert!((b as f64 - expect).abs() < 5.0 * sd, "bin {k}: {b}");
+    }
+    assert!(mean.length() < 5.0 / (3.0 * n as f64).sqrt(), "{mean}");
+}
+
+/// The belt-fed limit against closed forms: a two-pose chain leaving pose 1 with probability
+/// a and pose 2 with b has the stationary distribution (b, a)/(a + b) from any start; a pose
+/// that is never left keeps what reaches it.
+#[test]
+fn belt_fed_limit_is_the_stationary_distribution() {
+    // a = 30/100, b = 10/50.
+    let p = belt_fed_limit(&[vec![70, 30], vec![10, 40]], vec![1.0, 0.0]);
+    let (a, b) = (0.3, 0.2);
+    assert!(
+        (p[0] - b / (a + b)).abs() < 1e-10 && (p[1] - a / (a + b)).abs() < 1e-10,
+        "{p:?}"
+    );
+    // Periodic chain (always swap): the lazy chain still converges, to (½, ½).
+    let p = belt_fed_limit(&[vec![0, 5], vec![5, 0]], vec![1.0, 0.0]);
+    assert!((p[0] - 0.5).abs() < 1e-10, "{p:?}");
+    // Pose 2 absorbing, pose 3 never dropped from: 1 → 2 always; the start's share of 3 stays.
+    let p = belt_fed_limit(
+        &[vec![0, 4, 0], vec![0, 9, 0], vec![0, 0, 0]],
+        vec![0.5, 0.3, 0.2],
+    );
+    assert!(
+        (p[0]).abs() < 1e-10 && (p[1] - 0.8).abs() < 1e-10 && (p[2] - 0.2).abs() < 1e-10,
+        "{p:?}"
+    );
+}
+
+/// Bad parts and settings give errors that say what is wrong, never a panic.
+#[test]
+fn bad_parts_and_settings_are_refused() {
+    let dir = parts_dir();
+    let part = |shape: ShapeDesc, point_masses: Vec<PointMassDesc>| PartFileDesc {
+        name: Some("p".into()),
+        shape,
+        mass: Some(MassDesc::Density(1000.0)),
+        point_masses,
+    };
+    let cube = ShapeDesc::Box {
+        half_extents: [0.01; 3],
+    };
+    let e = PosePart::new(&part(ShapeDesc::Sphere { radius: 0.01 }, vec![]), &dir).unwrap_err();
+    assert!(e.to_string().contains("polyhedral"), "{e}");
+    // A heavy point mass outside the box drags the centre of mass out of the hull.
+    let e = PosePart::new(
+        &part(
+            cube.clone(),
+            vec![PointMassDesc {
+                mass: 100.0,
+                position: [0.5, 0.0, 0.0],
+            }],
+        ),
+        &dir,
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("not inside the part's convex hull"),
+        "{e}"
+    );
+    let e = PosePart::new(
+        &part(
+            ShapeDesc::Box {
+                half_extents: [0.01, 0.01, 0.0],
+            },
+            vec![],
+        ),
+        &dir,
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("half_extents") || e.to_string().contains("shape"),
+        "{e}"
+    );
+    let tmp = std::env::temp_dir().join(format!("impulse-poses-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    // An open mesh: a tetrahedron with a face missing.
+    std::fs::write(
+        tmp.join("open.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n",
+    )
+    .unwrap();
+    let e = PosePart::load(&tmp.join("open.obj")).unwrap_err();
+    assert!(
+        e.to_string().to_lowercase().contains("open") || e.to_string().contains("edge"),
+        "{e}"
+    );
+    std::fs::write(
+        tmp.join("bad.ron"),
+        "Part(shape: Box(half_extents: (0.01, 0.01)))",
+    )
+    .unwrap();
+    let e = PosePart::load(&tmp.join("bad.ron")).unwrap_err();
+    assert!(e.to_string().contains("bad.ron"), "{e}");
+    assert!(
+        PosePart::load(&tmp.join("part.stl"))
+            .unwrap_err()
+            .to_string()
+            .contains(".ron part file or a .obj")
+    );
+    std::fs::remove_dir_all(&tmp).ok();
+    let good = fixture("cube.ron");
+    for s in [
+        DropSettings {
+            height: f64::NAN,
+            ..quick()
+        },
+        DropSettings {
+            friction: -1.0,
+            ..quick()
+        },
+        DropSettings {
+            restitution: 1.5,
+            ..quick()
+        },
+        DropSettings {
+            max_time: 0.0,
+            ..quick()
+        },
+        DropSettings {
+            collision_epsilon: Some(0.0),
+            ..quick()
+        },
+    ] {
+        assert!(
+            run_drops(&good, &s, 1, 1, Shard::ALL, 1, &|_| {}).is_err(),
+            "{s:?}"
+        );
+    }
+    assert!(run_drops(&good, &quick(), 1, 1, Shard::ALL, 0, &|_| {}).is_err());
+    for bad in ["3/2", "1/0", "a/2", "1", "-1/2", ""] {
+        assert!(bad.parse::<Shard>().is_err(), "{bad}");
+    }
+    assert_eq!(
+        "2/5".parse::<Shard>().unwrap(),
+        Shard { index: 2, count: 5 }
+    );
+}
