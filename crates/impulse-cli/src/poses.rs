@@ -175,10 +175,11 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
     let a = &part.analysis;
     let _ = writeln!(
         t,
-        "part:             {} ({} hull facets, {} stable)",
+        "part:             {} ({} hull facets, {} stable, in {} poses told apart by shape)",
         part.name,
         a.facets().len(),
-        a.stable().len()
+        a.stable().len(),
+        a.classes().len()
     );
     let _ = writeln!(
         t,
@@ -210,15 +211,16 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
     };
     let _ = writeln!(
         t,
-        "\npose  normal (part frame)        quasi-static  perturbed({:.0}°)  uniform   {:.0} % interval      belt-fed  drops",
+        "\npose  facets  normal (part frame)        quasi-static  perturbed({:.0}°)  uniform   {:.0} % interval      belt-fed  drops",
         args.cone,
         100.0 * args.confidence
     );
     for r in &summary.rows {
         let _ = writeln!(
             t,
-            "{:>4}  ({:>6.3}, {:>6.3}, {:>6.3})  {}      {}         {}  [{:5.1}, {:5.1}] %   {}  {:>5}",
+            "{:>4}  {:>6}  ({:>6.3}, {:>6.3}, {:>6.3})  {}      {}         {}  [{:5.1}, {:5.1}] %   {}  {:>5}",
             r.pose,
+            r.facets.len(),
             r.normal[0],
             r.normal[1],
             r.normal[2],

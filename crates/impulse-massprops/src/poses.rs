@@ -46,6 +46,12 @@ pub const STABLE_MARGIN_REL: f64 = 1e-9;
 /// height. Default `1e-9`.
 pub const COM_INSIDE_REL: f64 = 1e-9;
 
+/// Two stable facets are one pose class when their signatures (height, facet area, solid
+/// angle, edge lengths and corner distances from the centre of mass's foot) agree to this
+/// fraction of the hull's diameter (lengths; its square for areas; absolutely for solid
+/// angles). Default `1e-6`.
+pub const CLASS_REL: f64 = 1e-6;
+
 /// One facet of the hull, as a resting pose.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RestingFacet {
@@ -172,6 +178,49 @@ impl PoseAnalysis {
             .filter(|f| f.stable)
             .map(|f| f.face)
             .collect()
+    }
+
+    /// The stable facets grouped into classes the part cannot tell apart: facets whose
+    /// resting configurations have the same signature ([`CLASS_REL`]: the height of the
+    /// centre of mass, the facet's area, solid angle, edge lengths and corner distances from
+    /// the centre of mass's foot). For a symmetric part (the faces of a cube, the sides of a
+    /// prism) these are the facets its symmetries map onto each other; a signature match
+    /// without a symmetry is possible in principle, so this is a reading aid, not a proof.
+    /// Classes are ordered by their first facet; facets in increasing order.
+    pub fn classes(&self) -> Vec<Vec<u32>> {
+        let size = diameter(&self.corners.iter().flatten().copied().collect::<Vec<_>>());
+        let tol = CLASS_REL * size;
+        let signature = |f: &RestingFacet| {
+            let c = &self.corners[f.face as usize];
+            let n = c.len();
+            let foot = self.com + f.height * f.normal;
+            let mut edges: Vec<f64> = (0..n).map(|k| (c[(k + 1) % n] - c[k]).length()).collect();
+            let mut reach: Vec<f64> = c.iter().map(|&x| (x - foot).length()).collect();
+            edges.sort_by(f64::total_cmp);
+            reach.sort_by(f64::total_cmp);
+            let area = (1..n.saturating_sub(1))
+                .map(|k| 0.5 * (c[k] - c[0]).cross(c[k + 1] - c[0]).length())
+                .sum::<f64>();
+            (f.height, area, f.solid_angle, edges, reach)
+        };
+        let same = |a: &(f64, f64, f64, Vec<f64>, Vec<f64>),
+                    b: &(f64, f64, f64, Vec<f64>, Vec<f64>)| {
+            (a.0 - b.0).abs() <= tol
+                && (a.1 - b.1).abs() <= tol * size
+                && (a.2 - b.2).abs() <= CLASS_REL
+                && a.3.len() == b.3.len()
+                && a.3.iter().zip(&b.3).all(|(x, y)| (x - y).abs() <= tol)
+                && a.4.iter().zip(&b.4).all(|(x, y)| (x - y).abs() <= tol)
+        };
+        let mut classes: Vec<(_, Vec<u32>)> = Vec::new();
+        for f in self.facets.iter().filter(|f| f.stable) {
+            let sig = signature(f);
+            match classes.iter_mut().find(|(s, _)| same(s, &sig)) {
+                Some((_, members)) => members.push(f.face),
+                None => classes.push((sig, vec![f.face])),
+            }
+        }
+        classes.into_iter().map(|(_, m)| m).collect()
     }
 
     /// The centre of mass the analysis was made with.

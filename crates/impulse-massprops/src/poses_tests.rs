@@ -353,3 +353,52 @@ fn bad_input_is_refused() {
     assert!(a.perturbed_quasi_static(-0.1).is_err());
     assert!(a.perturbed_quasi_static(f64::NAN).is_err());
 }
+
+/// Pose classes: a cube's six faces are one class, the 1 × 2 × 3 box's are three pairs, a
+/// regular prism's sides are one class and its ends another, and a random hull (no
+/// symmetry) has one facet per class.
+#[test]
+fn symmetric_facets_form_one_class() {
+    let classes = |hull: &ConvexPolyhedron| {
+        let mut c: Vec<usize> = PoseAnalysis::new(hull, DVec3::ZERO)
+            .unwrap()
+            .classes()
+            .iter()
+            .map(Vec::len)
+            .collect();
+        c.sort_unstable();
+        c
+    };
+    assert_eq!(classes(&cuboid(2.0, 2.0, 2.0)), vec![6]);
+    assert_eq!(classes(&cuboid(1.0, 2.0, 3.0)), vec![2, 2, 2]);
+    let prism: Vec<DVec3> = (0..12)
+        .flat_map(|k| {
+            let a = 2.0 * PI * k as f64 / 12.0;
+            [
+                DVec3::new(a.cos(), a.sin(), 0.4),
+                DVec3::new(a.cos(), a.sin(), -0.4),
+            ]
+        })
+        .collect();
+    assert_eq!(
+        classes(&ConvexPolyhedron::hull(&prism).unwrap()),
+        vec![2, 12]
+    );
+    // Off-centre centre of mass: the prism's ends differ (heights 0.3 and 0.5).
+    let a = PoseAnalysis::new(
+        &ConvexPolyhedron::hull(&prism).unwrap(),
+        DVec3::new(0.0, 0.0, 0.1),
+    )
+    .unwrap();
+    assert_eq!(a.classes().len(), 3);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(26);
+    for _ in 0..50 {
+        let (hull, com) = random_part(&mut rng);
+        let a = PoseAnalysis::new(&hull, com).unwrap();
+        assert!(a.classes().iter().all(|c| c.len() == 1));
+        assert_eq!(
+            a.classes().iter().map(Vec::len).sum::<usize>(),
+            a.stable().len()
+        );
+    }
+}

@@ -386,20 +386,22 @@ const BELT_FED_TOLERANCE: f64 = 1e-13;
 /// that almost never leaves a pose) is reported as it stands. Default `1_000_000`.
 const BELT_FED_MAX_ITERATIONS: usize = 1_000_000;
 
-/// One stable pose's line of a study's summary.
+/// One pose's line of a study's summary: a class of stable facets the part cannot tell
+/// apart ([`impulse_massprops::PoseAnalysis::classes`]: the six faces of a cube are one
+/// pose), every share summed over its facets.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PoseRow {
     /// Pose number, 1 for the most likely by the quasi-static estimate.
     pub pose: usize,
-    /// The hull face.
-    pub facet: u32,
-    /// The facet's outward normal in the part's own frame (points down at rest).
+    /// The hull faces of the class.
+    pub facets: Vec<u32>,
+    /// The first facet's outward normal in the part's own frame (points down at rest).
     pub normal: [f64; 3],
     /// Quasi-static estimate (eq. 7.1).
     pub quasi_static: f64,
     /// Perturbed quasi-static estimate.
     pub perturbed: f64,
-    /// Drops started uniform on SO(3) that came to rest on this facet.
+    /// Drops started uniform on SO(3) that came to rest on one of these facets.
     pub uniform_count: u64,
     /// Their fraction of the uniform drops: the dynamic estimate for a uniformly random
     /// start (what the quasi-static estimates assume).
@@ -430,9 +432,11 @@ pub struct PoseSummary {
     pub confidence: f64,
     /// Worst-case half-width of the uniform drops' intervals (eq. 7.3).
     pub half_width: Option<f64>,
-    /// `transitions[a][b]`: belt drops started on the pose of row a that ended on the pose
-    /// of row b.
+    /// `transitions[a][b]`: belt drops started on stable facet `stable[a]` that ended on
+    /// `stable[b]` (facets, not classes: the belt-fed chain runs between facets).
     pub transitions: Vec<Vec<u64>>,
+    /// The stable facets indexing [`Self::transitions`].
+    pub stable: Vec<u32>,
 }
 
 /// Summarises `outcomes` of `part`: per stable facet the quasi-static and perturbed
@@ -470,8 +474,7 @@ pub fn summarize(
         .analysis
         .perturbed_quasi_static(cone)
         .map_err(|e| bad("cone", e.to_string()))?;
-    let mut stable = part.analysis.stable();
-    stable.sort_by(|a, b| qs[*b as usize].total_cmp(&qs[*a as usize]).then(a.cmp(b)));
+    let stable = part.analysis.stable();
     let row_of = |f: u32, index: u64| {
         stable.iter().position(|&x| x == f).ok_or_else(|| {
             bad(
@@ -517,11 +520,15 @@ pub fn summarize(
             };
             belt_fed_limit(&transitions, start)
         });
-    let rows = stable
-        .iter()
+    let mut classes = part.analysis.classes();
+    let share = |c: &[u32]| c.iter().map(|&f| qs[f as usize]).sum::<f64>();
+    classes.sort_by(|a, b| share(b).total_cmp(&share(a)).then(a[0].cmp(&b[0])));
+    let rows = classes
+        .into_iter()
         .enumerate()
-        .map(|(k, &f)| {
-            let count = uniform_counts[k];
+        .map(|(k, facets)| {
+            let at = |f: u32| stable.iter().position(|&x| x == f).unwrap_or(0);
+            let count: u64 = facets.iter().map(|&f| uniform_counts[at(f)]).sum();
             let (uniform, interval) = if uniform_drops > 0 {
                 (
                     count as f64 / uniform_drops as f64,
@@ -533,14 +540,16 @@ pub fn summarize(
             };
             Ok(PoseRow {
                 pose: k + 1,
-                facet: f,
-                normal: part.normal_in_part_frame(f).to_array(),
-                quasi_static: qs[f as usize],
-                perturbed: pqs[f as usize],
+                normal: part.normal_in_part_frame(facets[0]).to_array(),
+                quasi_static: share(&facets),
+                perturbed: facets.iter().map(|&f| pqs[f as usize]).sum(),
                 uniform_count: count,
                 uniform,
                 interval,
-                belt_fed: belt.as_ref().map(|p| p[k]),
+                belt_fed: belt
+                    .as_ref()
+                    .map(|p| facets.iter().map(|&f| p[at(f)]).sum()),
+                facets,
             })
         })
         .collect::<Result<_, SimError>>()?;
@@ -553,6 +562,7 @@ pub fn summarize(
         confidence,
         half_width,
         transitions,
+        stable,
     })
 }
 
