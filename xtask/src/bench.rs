@@ -10,7 +10,8 @@
 //! 0), and whether all the scene's metrics pass. It writes `bench.csv` and one `<scene>.svg`
 //! (error against slowdown, log–log) per scene into the output directory (default
 //! `target/bench`). Then it runs the stack study ([`crate::stacks`], also alone with
-//! `--case stacks`) and writes `stacks.csv`. With `--peers` it runs [`crate::peers`] instead
+//! `--case stacks`) and writes `stacks.csv`, and the pose studies ([`crate::poses`], also
+//! alone with `--case poses`), which write `poses.csv`. With `--peers` it runs [`crate::peers`] instead
 //! (re-running itself with the `peers` feature, which builds the peer engine).
 
 use std::fmt::Write as _;
@@ -135,6 +136,9 @@ pub fn run_bench(options: &Options) -> Result<()> {
     if options.case.as_deref() == Some(crate::forks::CASE) {
         return crate::forks::run(&out);
     }
+    if options.case.as_deref() == Some(crate::poses::CASE) {
+        return crate::poses::run(&out);
+    }
     let stacks_only = options.case.as_deref() == Some(STACKS_CASE);
     let checks: Vec<SceneCheck> = scene_checks()
         .into_iter()
@@ -198,6 +202,9 @@ pub fn run_bench(options: &Options) -> Result<()> {
         std::fs::write(&path, crate::stacks::study()?)
             .map_err(|e| format!("{}: {e}", path.display()))?;
         println!("wrote {}", path.display());
+    }
+    if options.case.is_none() {
+        crate::poses::run(&out)?;
     }
     Ok(())
 }

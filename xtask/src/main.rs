@@ -24,6 +24,7 @@ mod layering;
 // Without the `peers` feature the runner is built (so CI checks it) but has no engine to call.
 #[cfg_attr(not(feature = "peers"), allow(dead_code))]
 mod peers;
+mod poses;
 mod stacks;
 mod validate;
 
@@ -50,6 +51,8 @@ commands:
                                       (default target/bench); then the stack study of 1–8 blocks
                                       (stacks.csv; alone with --case stacks); --case forks
                                       runs the FORK⁻¹S study alone (Tables 1-2, Fig. 7);
+                                      --case poses the pose studies alone (drops/s on 1
+                                      and 2 threads, thick coin, thesis parts; poses.csv);
                                       --peers runs stacks, dominos, ramp, sliding→rolling and
                                       pool break in impulse and rapier3d-f64 side by side
                                       (builds xtask with --features peers; peers.csv, peers.svg)

@@ -5,6 +5,7 @@
 //! names are unique and stable (ASCII letters, digits, `-`, `_`, `.`).
 
 mod massprops;
+mod poses;
 pub mod scenes;
 
 use crate::validate::case::Case;
@@ -13,6 +14,7 @@ use crate::validate::case::Case;
 pub fn all() -> Vec<Case> {
     let mut cases = Vec::new();
     cases.extend(massprops::cases());
+    cases.extend(poses::cases());
     cases.extend(scenes::cases());
     cases
 }
