@@ -10,7 +10,7 @@
 //! - [`PoseAnalysis`]: a part's stable resting poses on a plane from its convex hull and centre
 //!   of mass, and the quasi-static and perturbed quasi-static estimates of how often it comes
 //!   to rest in each (thesis §7.5, eq. 7.1; [`poses`]); [`stats`]: the error metric and
-//!   sample sizes of pose statistics (eqs. 7.2, 7.3).
+//!   sample sizes and intervals of pose statistics (eqs. 7.2, 7.3).
 //!
 //! **Must not know** about bodies, poses over time, collisions, simulation or scene files. It
 //! uses `impulse-geom` for meshes and poses and faer for the symmetric eigendecomposition.

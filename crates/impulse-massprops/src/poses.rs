@@ -1,5 +1,5 @@
 //! Stable poses of a part and the quasi-static estimates of how often it comes to rest in each
-//! (thesis §7.5, Problem 10 "EPS"; after Wiegley et al. and [MZG⁺96]).
+//! (thesis §7.5, Problem 10 "EPS"; after Wiegley et al. and \[MZG⁺96\]).
 //!
 //! A part dropped on a large flat surface comes to rest on a facet of its convex hull. For
 //! every hull facet (coplanar hull faces are one facet: [`ConvexPolyhedron`] merges them) this
@@ -22,7 +22,7 @@
 //! height of the centre of mass), and the fraction of that disk beyond an edge is the share
 //! that rolls across it \[inferred: the thesis gives only "a cone projected down from the
 //! COM estimates how likely the part is to roll across edge e"; the details are in
-//! [MZG⁺96], not in the seed; the thesis used α = 20° for every part\]. The disk's area
+//! \[MZG⁺96\], not in the seed; the thesis used α = 20° for every part\]. The disk's area
 //! beyond each edge is exact: rays from the disk's centre through the facet's corners split
 //! it into one wedge per edge, and the part of a wedge beyond its edge's line, at distance
 //! d, over the wedge's angles φ₁..φ₂ measured from the edge's normal, is

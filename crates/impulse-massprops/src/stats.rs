@@ -142,9 +142,11 @@ pub fn worst_half_width(n: u64, confidence: f64) -> Result<f64, MassError> {
     Ok(two_sided_z(confidence)? / (2.0 * (n as f64).sqrt()))
 }
 
-/// The normal-approximation (Wald) interval of a binomial proportion: `count` of `n` drops
-/// ended in a pose; returns (low, high), clamped to [0, 1]. The approximation is fair when
-/// both `count` and `n − count` exceed 5 (the thesis's rule of thumb).
+/// The Wilson score interval of a binomial proportion: `count` of `n` drops ended in a pose;
+/// returns (low, high) within [0, 1]. It is the normal approximation of eq. 7.3 solved for
+/// the proportion rather than evaluated at the observed one, so a pose seen 0 (or n) times
+/// still gets an interval of positive width, where the plain (Wald) interval collapses to a
+/// point.
 ///
 /// # Errors
 /// [`MassError::InvalidStatistic`] for n = 0, count > n or a confidence outside (0, 1).
@@ -156,9 +158,11 @@ pub fn binomial_interval(count: u64, n: u64, confidence: f64) -> Result<(f64, f6
         });
     }
     let z = two_sided_z(confidence)?;
-    let p = count as f64 / n as f64;
-    let half = z * (p * (1.0 - p) / n as f64).sqrt();
-    Ok(((p - half).max(0.0), (p + half).min(1.0)))
+    let (p, n) = (count as f64 / n as f64, n as f64);
+    let shrink = 1.0 + z * z / n;
+    let centre = (p + z * z / (2.0 * n)) / shrink;
+    let half = z / shrink * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
+    Ok(((centre - half).max(0.0), (centre + half).min(1.0)))
 }
 
 #[cfg(test)]
@@ -206,20 +210,20 @@ mod tests {
         assert!(sample_size(0.0, 0.9).is_err() && sample_size(0.05, 1.0).is_err());
     }
 
-    /// The binomial interval against its formula at hand-computed points.
+    /// The Wilson interval against values computed apart (Python, z = 1.959963984540054).
     #[test]
-    fn binomial_interval_is_the_wald_interval() {
-        // 333 of 2000: p = 0.1665, sd = sqrt(0.1665·0.8335/2000) = 8.3303e-3.
-        let (lo, hi) = binomial_interval(333, 2000, 0.95).unwrap();
-        assert!(
-            (lo - (0.1665 - 1.959_964 * 8.330_29e-3)).abs() < 1e-6,
-            "{lo}"
-        );
-        assert!(
-            (hi - (0.1665 + 1.959_964 * 8.330_29e-3)).abs() < 1e-6,
-            "{hi}"
-        );
-        assert_eq!(binomial_interval(0, 10, 0.95).unwrap(), (0.0, 0.0));
+    fn binomial_interval_is_the_wilson_interval() {
+        for (count, n, lo, hi) in [
+            (333, 2000, 0.150_815_969_870_158, 0.183_462_700_666_437_66),
+            (0, 10, 0.0, 0.277_532_799_862_889_2),
+            (10, 10, 0.722_467_200_137_110_7, 1.0),
+        ] {
+            let (l, h) = binomial_interval(count, n, 0.95).unwrap();
+            assert!(
+                (l - lo).abs() < 1e-8 && (h - hi).abs() < 1e-8,
+                "{count}/{n}: ({l}, {h})"
+            );
+        }
         assert!(binomial_interval(11, 10, 0.95).is_err());
         assert!(binomial_interval(0, 0, 0.95).is_err());
     }

@@ -7,8 +7,8 @@
 //! exit velocity [`DropSettings::exit_speed`] along x, in the switching contact model. The
 //! world is stepped in polls of [`REST_POLL`] until the part's island sleeps (at rest: the
 //! switching model's sleep test, not a fixed long duration) or [`DropSettings::max_time`]
-//! passes. The final orientation is classified by [`impulse_massprops::PoseAnalysis::
-//! facet_facing`] within [`FACET_ANGLE`].
+//! passes. The final orientation is classified by
+//! [`impulse_massprops::PoseAnalysis::facet_facing`] within [`FACET_ANGLE`].
 //!
 //! **Starts** (thesis §7.5). The thesis dropped its first 20 parts from orientations uniform
 //! on SO(3) and every later one from a pose drawn from the histogram of the final poses so
