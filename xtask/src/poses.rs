@@ -1,6 +1,7 @@
 //! `cargo xtask bench --case poses`: pose studies (thesis §7.5) — drops per second on 1 and
-//! 2 threads for a 60-facet part, the thick coin's edge share at two drop heights against
-//! the quasi-static one, and the estimates for the thesis's four parts (approximate shapes).
+//! 2 threads for a 60-facet part, the thesis's sequential feedback sampling against
+//! independent drops on a cube, the thick coin's edge share at two drop heights against the
+//! quasi-static one, and the estimates for the thesis's four parts (approximate shapes).
 //! Writes `poses.csv`.
 
 use std::fmt::Write as _;
@@ -59,6 +60,58 @@ fn study(
     Ok((out, t.elapsed().as_secs_f64()))
 }
 
+/// Seeds of the thesis-feedback comparison on the cube.
+const FEEDBACK_SEEDS: [u64; 4] = [1, 2, 3, 4];
+
+/// The cube's face shares by the thesis's sequential feedback sampling, one study per seed,
+/// against independent uniform drops: how far the feedback's result depends on its luck.
+fn feedback_spread(csv: &mut String) -> Result<()> {
+    let cube = load("cube.ron")?;
+    println!(
+        "\ncube, {DROPS} drops per study: smallest and largest face share (symmetry: 16.67 %)"
+    );
+    let faces = |outcomes: &[poses::DropOutcome]| {
+        let shares: Vec<f64> = cube
+            .analysis
+            .facets()
+            .iter()
+            .map(|f| {
+                outcomes.iter().filter(|o| o.facet == Some(f.face)).count() as f64
+                    / outcomes.len() as f64
+            })
+            .collect();
+        (
+            shares.iter().copied().fold(1.0, f64::min),
+            shares.iter().copied().fold(0.0, f64::max),
+        )
+    };
+    for seed in FEEDBACK_SEEDS {
+        let t = Instant::now();
+        let fed = poses::run_thesis_feedback(&cube, &DropSettings::default(), seed, DROPS, &|_| {})
+            .map_err(|e| e.to_string())?;
+        let wall = t.elapsed().as_secs_f64();
+        let uniform = DropSettings {
+            belt_fed: false,
+            ..DropSettings::default()
+        };
+        let ind = poses::run_drops(&cube, &uniform, seed, DROPS, Shard::ALL, 2, &|_| {})
+            .map_err(|e| e.to_string())?;
+        let ((flo, fhi), (ilo, ihi)) = (faces(&fed), faces(&ind));
+        println!(
+            "  seed {seed}: thesis feedback {:.1}–{:.1} %   independent uniform drops {:.1}–{:.1} %",
+            100.0 * flo,
+            100.0 * fhi,
+            100.0 * ilo,
+            100.0 * ihi
+        );
+        let _ = writeln!(
+            csv,
+            "feedback,cube,seed={seed},min..max,,,,{ilo:.4}..{ihi:.4},{flo:.4}..{fhi:.4},{wall:.3},"
+        );
+    }
+    Ok(())
+}
+
 /// Runs the pose bench and writes `poses.csv` into `out`.
 pub fn run(out: &Path) -> Result<()> {
     let mut csv = String::from(
@@ -96,6 +149,7 @@ pub fn run(out: &Path) -> Result<()> {
     if !same {
         return Err("the 1- and 2-thread studies differ".into());
     }
+    feedback_spread(&mut csv)?;
     let coin = load(COIN_PART)?;
     println!(
         "\nthick coin, edge share ({COIN_DROPS} uniform starts on SO(3) per height, rolling after {COIN_MAX_TIME} s counted apart):"

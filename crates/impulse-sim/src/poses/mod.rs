@@ -28,7 +28,8 @@
 //!   ([`summarize`]), estimated without the feedback's dependence on early drops.
 //!
 //! Drop i's random stream depends only on (seed, i), so a study's outcomes are the same for
-//! any thread count and any shard split.
+//! any thread count and any shard split. [`run_thesis_feedback`] runs the thesis's own
+//! sequential sampling, for comparison.
 //!
 //! **Shards**: [`Shard`] `K/N` runs drops K, K + N, K + 2N, …, and [`merge`] combines shard
 //! files into exactly the file of the unsharded run.
@@ -38,7 +39,8 @@ mod study;
 
 pub use part::{PartFileDesc, PosePart};
 pub use study::{
-    DropOutcome, DropSettings, PoseRow, PoseSummary, Shard, StudyFile, merge, run_drops, summarize,
+    DropOutcome, DropSettings, PoseRow, PoseSummary, Shard, StudyFile, THESIS_PILOT, merge,
+    run_drops, run_thesis_feedback, summarize,
 };
 
 /// The world is stepped in polls of this length (s) while waiting for the part to sleep.

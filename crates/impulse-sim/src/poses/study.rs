@@ -378,6 +378,56 @@ pub fn run_drops(
     })
 }
 
+/// Drops of [`run_thesis_feedback`] that start uniform on SO(3) (the thesis's 20).
+pub const THESIS_PILOT: u64 = 20;
+
+/// The thesis's own sampling, for comparison (§7.5): drops one after another, the first
+/// [`THESIS_PILOT`] from orientations uniform on SO(3), each later one from the final
+/// orientation of an earlier drop drawn at random (the running histogram of final poses),
+/// tilted by up to [`DropSettings::jitter_degrees`] about a random axis. Sequential by
+/// nature: no threads, no shards. Drop i's random stream is still (seed, i), so its first
+/// [`THESIS_PILOT`] drops equal [`run_drops`]'s with [`DropSettings::belt_fed`] off. The
+/// dynamic estimate is the histogram of all its final poses; each outcome's `start` is the
+/// facet it started on (`None` for the pilot).
+///
+/// # Errors
+/// As [`run_drops`].
+pub fn run_thesis_feedback(
+    part: &PosePart,
+    settings: &DropSettings,
+    seed: u64,
+    drops: u64,
+    progress: &dyn Fn(u64),
+) -> Result<Vec<DropOutcome>, SimError> {
+    settings.validate()?;
+    let world = template(part, settings)?;
+    let mut out: Vec<DropOutcome> = Vec::new();
+    for i in 0..drops {
+        let mut rng = stream(seed, i);
+        let rests: Vec<&DropOutcome> = out.iter().filter(|o| o.facet.is_some()).collect();
+        let start = if i < THESIS_PILOT || rests.is_empty() {
+            (uniform_rotation(&mut rng), None)
+        } else {
+            let from = rests[rng.random_range(0..rests.len())];
+            let tilt = DQuat::from_axis_angle(
+                uniform_direction(&mut rng),
+                settings.jitter_degrees.to_radians() * rng.random::<f64>(),
+            );
+            (
+                (tilt * DQuat::from_array(from.rotation)).normalize(),
+                from.facet,
+            )
+        };
+        let o = drop_once(part, settings, &world, i, start).map_err(|e| SimError::Runtime {
+            time: 0.0,
+            message: format!("drop {i}: {e}"),
+        })?;
+        out.push(o);
+        progress(i + 1);
+    }
+    Ok(out)
+}
+
 /// Power iterations of the belt-fed estimate stop when an iteration changes the estimate by
 /// less than this (sum of absolute changes). Default `1e-13`.
 const BELT_FED_TOLERANCE: f64 = 1e-13;

@@ -251,3 +251,28 @@ fn bad_parts_and_settings_are_refused() {
         Shard { index: 2, count: 5 }
     );
 }
+
+/// The thesis's sequential sampling: its first 20 drops are exactly the uniform drops of
+/// `run_drops` (same streams), every later one starts tilted by at most the jitter from a rest
+/// pose an earlier drop ended in, and it is reproducible.
+#[test]
+fn thesis_feedback_starts_from_earlier_rest_poses() {
+    let part = fixture("box-1x2x3.ron");
+    let s = DropSettings {
+        belt_fed: false,
+        ..quick()
+    };
+    let n = THESIS_PILOT + 10;
+    let seq = run_thesis_feedback(&part, &s, 4, n, &|_| {}).unwrap();
+    let uniform = run_drops(&part, &s, 4, THESIS_PILOT, Shard::ALL, 2, &|_| {}).unwrap();
+    assert_eq!(&seq[..THESIS_PILOT as usize], &uniform[..]);
+    for o in &seq[THESIS_PILOT as usize..] {
+        let from = o.start.expect("a later drop starts from a rest pose");
+        assert!(
+            seq[..o.index as usize]
+                .iter()
+                .any(|e| e.facet == Some(from))
+        );
+    }
+    assert_eq!(run_thesis_feedback(&part, &s, 4, n, &|_| {}).unwrap(), seq);
+}
