@@ -618,7 +618,22 @@ impl BlendedModel {
             .flat_map(|(p, r)| (r.inverse() * *p).log().to_array())
             .collect();
         let a = &b.mass + &b.damping * h + &b.stiffness * (h * h);
-        let a_inv = crate::linalg::pinv(a.as_ref(), Tsvd::default())?.inverse;
+        // The system matrix at the blend's rank, the closest model's (§7.5): `M̄` and `K̄`
+        // come from different matched eigenvectors (Algorithm 3 on Ā and on C̄), so when the
+        // models' ranks differ their ranges differ by the blend and `A` gains singular values
+        // outside that rank, of the size of the difference; inverted, they turn the load's
+        // inadmissible part into runaway velocities (the straight robot arm, rank 5, blended
+        // with bent ones, rank 6: 1e6 m/s within 20 steps under 1 N).
+        let rank = self.models[closest(&b.alpha)].rank;
+        let a_inv = pinv_rank(
+            a.as_ref(),
+            rank,
+            Tsvd::default(),
+            0.0,
+            tol::BLEND_SYSTEM_GAP,
+            "blended system matrix",
+        )?
+        .inverse;
         let rhs: Vec<f64> = (0..n)
             .map(|r| {
                 (0..n)
