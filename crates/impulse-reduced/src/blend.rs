@@ -26,6 +26,16 @@
 //!   this is that model's own Algorithm 4, `H_l⁽ⁱ⁾ exp(T_l⁽ⁱ⁾ K⁽ⁱ⁾ ξ_e⁽ⁱ⁾)`, so the blend
 //!   reproduces its full static solution.
 //!
+//!   Each `T_l⁽ⁱ⁾` maps wrenches in model i's end-effector frames `H_e⁽ⁱ⁾` to a twist in its
+//!   link frame `H_l⁽ⁱ⁾`, and is applied here in the blended frames `H̄_e`, `H̄_l` as it is.
+//!   Re-expressing each map in the blended frames first (`Ad_{H̄_l⁻¹ H_l⁽ⁱ⁾} T_l⁽ⁱ⁾
+//!   Ad_{H̄_e⁻¹ H_e⁽ⁱ⁾}ᵀ`) was measured on the Fig. 7 studies between samples against the full
+//!   statics and left out: it moves the internal links by at most 7% of their error (4.7% on
+//!   the "Y", 7.0% on the ladder-36), lowers the worst internal link's error by at most 5.6%
+//!   and raises the constraint error by up to 14% (ladder-36 at 85.4 N); likely because a map
+//!   changes between samples by as much through the moving linearisation as through its
+//!   frames (docs/forks.md).
+//!
 //!   Not each model's own wrench `ᵉw⁽ⁱ⁾ = K⁽ⁱ⁾ log(H_e⁽ⁱ⁾⁻¹ H_e)` (Algorithm 4 read per model,
 //!   this crate's choice until the mid-way links were measured): between two samples the
 //!   blended end effector lies on the blended model's manifold `H̄_e exp(C̄ w)`, which passes
@@ -38,11 +48,12 @@
 //!   full solution as the worse neighbouring model alone, now 1.15 and 0.97 (the worst link is
 //!   then the end effector). See "Internal links mid-way" in [`crate::study`].
 
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 use faer::{Mat, Side};
 use impulse_geom::{Pose, Twist};
 
+use crate::blend_cache::{ClosestCache, blend_pose};
 use crate::construct::ReducedModel;
 use crate::error::Error;
 use crate::internal::link_twist;
@@ -261,6 +272,14 @@ pub fn blend_rank1(eigs: &[&Eigen], mats: &[&Mat<f64>], alpha: &[f64], rank: usi
     out
 }
 
+/// The closest model: the largest weight (the last of equal largest ones, as everywhere in
+/// this module).
+fn closest(alpha: &[f64]) -> usize {
+    (0..alpha.len())
+        .max_by(|&a, &b| alpha[a].total_cmp(&alpha[b]))
+        .unwrap_or(0)
+}
+
 /// eq. 28: `H⁽ᶜ⁾ exp(Σ_{j≠c} α_j log(H⁽ᶜ⁾⁻¹ H⁽ʲ⁾))`, c the largest weight.
 #[must_use]
 pub fn blend_poses(poses: &[Pose], alpha: &[f64]) -> Pose {
@@ -280,7 +299,8 @@ pub fn blend_poses(poses: &[Pose], alpha: &[f64]) -> Pose {
 
 /// A set of models of one mechanism, with their decompositions (Algorithm 5's data).
 pub struct BlendedModel {
-    /// The models; `models[0]` is usually the rest model.
+    /// The models; `models[0]` is usually the rest model. Read them, do not change them: the
+    /// decompositions and the per-closest-model data are built from them.
     pub models: Vec<ReducedModel>,
     /// Per model: decompositions of compliance, accelerability, damping compliance.
     eig: Vec<[Eigen; 3]>,
@@ -288,6 +308,12 @@ pub struct BlendedModel {
     dcomp: Vec<Mat<f64>>,
     /// Rest poses of the end effectors (the zero of ξ in eq. 25).
     rest: Vec<Pose>,
+    /// Per model, per end effector: its reference pose's displacement from rest,
+    /// `log(H_rest⁻¹ H_e⁽ⁱ⁾)` (the `ξ_e⁽ⁱ⁾` of eq. 25; fixed, so formed once).
+    sample_xi: Vec<Vec<Twist>>,
+    /// Per model, the weight-independent parts of a blend with that model closest
+    /// (Algorithm 3's matching, eq. 28's logarithms), built the first time it is the closest.
+    closest: Vec<OnceLock<ClosestCache>>,
     /// Bounding radius r (eq. 25).
     pub radius: f64,
     /// Shepard exponent p (eq. 25; [`SHEPARD_POWER`] unless changed).
@@ -347,11 +373,24 @@ impl BlendedModel {
             ]);
             dcomp.push(dc);
         }
+        let sample_xi = models
+            .iter()
+            .map(|m| {
+                m.reference
+                    .iter()
+                    .zip(&rest)
+                    .map(|(hi, r)| (r.inverse() * *hi).log())
+                    .collect()
+            })
+            .collect();
+        let closest = models.iter().map(|_| OnceLock::new()).collect();
         Ok(BlendedModel {
             models,
             eig,
             dcomp,
             rest,
+            sample_xi,
+            closest,
             radius,
             power: SHEPARD_POWER,
             support: SUPPORT,
@@ -362,18 +401,18 @@ impl BlendedModel {
     /// Weights (eq. 25) for end effectors at world poses `ee` (fixed base).
     #[must_use]
     pub fn weights(&self, ee: &[Pose]) -> Vec<f64> {
-        let d: Vec<f64> = self
-            .models
+        let x: Vec<Twist> = ee
             .iter()
-            .map(|m| {
-                ee.iter()
-                    .zip(&m.reference)
-                    .zip(&self.rest)
-                    .map(|((h, hi), r)| {
-                        let x = (r.inverse() * *h).log();
-                        let xi = (r.inverse() * *hi).log();
-                        scaled_norm(&(x - xi), self.radius)
-                    })
+            .zip(&self.rest)
+            .map(|(h, r)| (r.inverse() * *h).log())
+            .collect();
+        let d: Vec<f64> = self
+            .sample_xi
+            .iter()
+            .map(|xi| {
+                x.iter()
+                    .zip(xi)
+                    .map(|(x, xi)| scaled_norm(&(*x - *xi), self.radius))
                     .sum()
             })
             .collect();
@@ -389,30 +428,22 @@ impl BlendedModel {
     /// [`Error::Rank`] / [`Error::LinearAlgebra`] from the inversions.
     pub fn blend(&self, ee: &[Pose]) -> Result<Blend, Error> {
         let alpha = self.weights(ee);
-        let c = (0..alpha.len())
-            .max_by(|&a, &b| alpha[a].total_cmp(&alpha[b]))
-            .unwrap_or(0);
+        let c = closest(&alpha);
         let rank = self.models[c].rank;
-        let blended = |which: usize, mats: Vec<&Mat<f64>>| -> Mat<f64> {
-            let eigs: Vec<&Eigen> = self.eig.iter().map(|e| &e[which]).collect();
-            blend_rank1(&eigs, &mats, &alpha, rank)
-        };
-        let inv = |which: usize, mats: Vec<&Mat<f64>>, name: &str| -> Result<Mat<f64>, Error> {
-            let b = blended(which, mats);
+        let cache = self.cache(c);
+        let inv = |which: usize, name: &str| -> Result<Mat<f64>, Error> {
+            // Algorithm 3 with the matching of `cache` (as `blend_rank1`).
+            let b = cache.matching[which].blend(&alpha, c);
             Ok(pinv_rank(b.as_ref(), rank, Tsvd::default(), 0.0, tol::RANK_GAP, name)?.inverse)
         };
         let (compliance, stiffness) = self.blended_compliance(&alpha)?;
-        let mass = inv(
-            1,
-            self.models.iter().map(|m| &m.accelerability).collect(),
-            "blended accelerability",
-        )?;
+        let mass = inv(1, "blended accelerability")?;
         let damped = self
             .models
             .iter()
             .any(|m| crate::linalg::max_abs(m.damping.as_ref()) > 0.0);
         let damping = if damped {
-            inv(2, self.dcomp.iter().collect(), "blended damping")?
+            inv(2, "blended damping")?
         } else {
             Mat::zeros(stiffness.nrows(), stiffness.ncols())
         };
@@ -479,26 +510,39 @@ impl BlendedModel {
         })
     }
 
-    /// Blended end-effector reference poses `H̄_e` (eq. 28).
+    /// The weight-independent parts of a blend whose closest model is `c` (built on first
+    /// use; see [`crate::blend_cache`]).
+    fn cache(&self, c: usize) -> &ClosestCache {
+        self.closest[c].get_or_init(|| {
+            let mats: Vec<[&Mat<f64>; 3]> = self
+                .models
+                .iter()
+                .zip(&self.dcomp)
+                .map(|(m, d)| [&m.compliance, &m.accelerability, d])
+                .collect();
+            ClosestCache::new(c, &self.models, &self.eig, &mats)
+        })
+    }
+
+    /// Blended end-effector reference poses `H̄_e` (eq. 28, as [`blend_poses`] over the
+    /// models' `reference`).
     fn blended_reference(&self, alpha: &[f64]) -> Vec<Pose> {
-        (0..self.rest.len())
-            .map(|e| {
-                let poses: Vec<Pose> = self.models.iter().map(|m| m.reference[e]).collect();
-                blend_poses(&poses, alpha)
-            })
+        let c = closest(alpha);
+        let (k, logs) = (self.models.len(), &self.cache(c).ee_logs);
+        self.models[c]
+            .reference
+            .iter()
+            .enumerate()
+            .map(|(e, base)| blend_pose(base, &logs[e * k..(e + 1) * k], alpha, c))
             .collect()
     }
 
     /// The blended compliance `C̄` (Algorithm 3 at the rank of the closest model) and its
     /// inverse `K̄` for weights `alpha`.
     fn blended_compliance(&self, alpha: &[f64]) -> Result<(Mat<f64>, Mat<f64>), Error> {
-        let c = (0..alpha.len())
-            .max_by(|&a, &b| alpha[a].total_cmp(&alpha[b]))
-            .unwrap_or(0);
+        let c = closest(alpha);
         let rank = self.models[c].rank;
-        let eigs: Vec<&Eigen> = self.eig.iter().map(|e| &e[0]).collect();
-        let mats: Vec<&Mat<f64>> = self.models.iter().map(|m| &m.compliance).collect();
-        let compliance = blend_rank1(&eigs, &mats, alpha, rank);
+        let compliance = self.cache(c).matching[0].blend(alpha, c);
         let stiffness = pinv_rank(
             compliance.as_ref(),
             rank,
@@ -540,23 +584,20 @@ impl BlendedModel {
         let w: Vec<f64> = (0..n)
             .map(|r| (0..n).map(|c| stiffness[(r, c)] * xi[c]).sum())
             .collect();
-        // A model without weight adds nothing to eq. 28 or to T̄: it is not evaluated.
-        let (models, alpha): (Vec<&ReducedModel>, Vec<f64>) = self
-            .models
-            .iter()
-            .zip(alpha)
-            .filter(|(_, a)| **a > 0.0)
-            .map(|(m, a)| (m, *a))
-            .unzip();
+        let c = closest(alpha);
+        let (count, logs) = (self.models.len(), &self.cache(c).link_logs);
         (0..self.models[0].internal.len())
-            .map(|k| {
-                // eq. 28 on the link's reference poses, then eq. 22 with T̄_l, then eq. 6.
-                let refs: Vec<Pose> = models.iter().map(|m| m.internal_reference[k]).collect();
-                let twist = models
+            .map(|l| {
+                // eq. 28 on the link's reference poses, then eq. 22 with T̄_l, then eq. 6. A
+                // model without weight adds nothing to either: it is not evaluated.
+                let twist = self
+                    .models
                     .iter()
-                    .zip(&alpha)
-                    .fold(Twist::ZERO, |acc, (m, a)| acc + link_twist(m, k, &w) * *a);
-                blend_poses(&refs, &alpha) * Pose::exp(&twist)
+                    .zip(alpha)
+                    .filter(|(_, a)| **a > 0.0)
+                    .fold(Twist::ZERO, |acc, (m, a)| acc + link_twist(m, l, &w) * *a);
+                let base = &self.models[c].internal_reference[l];
+                blend_pose(base, &logs[l * count..(l + 1) * count], alpha, c) * Pose::exp(&twist)
             })
             .collect()
     }
@@ -587,7 +628,22 @@ impl BlendedModel {
             .flat_map(|(p, r)| (r.inverse() * *p).log().to_array())
             .collect();
         let a = &b.mass + &b.damping * h + &b.stiffness * (h * h);
-        let a_inv = crate::linalg::pinv(a.as_ref(), Tsvd::default())?.inverse;
+        // The system matrix at the blend's rank, the closest model's (§7.5): `M̄` and `K̄`
+        // come from different matched eigenvectors (Algorithm 3 on Ā and on C̄), so when the
+        // models' ranks differ their ranges differ by the blend and `A` gains singular values
+        // outside that rank, of the size of the difference; inverted, they turn the load's
+        // inadmissible part into runaway velocities (the straight robot arm, rank 5, blended
+        // with bent ones, rank 6: 1e6 m/s within 20 steps under 1 N).
+        let rank = self.models[closest(&b.alpha)].rank;
+        let a_inv = pinv_rank(
+            a.as_ref(),
+            rank,
+            Tsvd::default(),
+            0.0,
+            tol::BLEND_SYSTEM_GAP,
+            "blended system matrix",
+        )?
+        .inverse;
         let rhs: Vec<f64> = (0..n)
             .map(|r| {
                 (0..n)

@@ -31,6 +31,7 @@
 #![forbid(unsafe_code)]
 
 pub mod blend;
+mod blend_cache;
 pub mod construct;
 mod desc;
 pub mod dynamics;
