@@ -22,28 +22,28 @@ pub struct PosesArgs {
     #[arg(long, default_value_t = 2000)]
     drops: u64,
     /// Height of the part's lowest point above the belt at release (m).
-    #[arg(long, default_value_t = DropSettings::default().height)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DropSettings::default().height)]
     height: f64,
     /// Horizontal speed at release (m/s).
-    #[arg(long, default_value_t = DropSettings::default().exit_speed)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DropSettings::default().exit_speed)]
     exit_speed: f64,
     /// Coulomb friction between part and belt.
-    #[arg(long, default_value_t = DropSettings::default().friction)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DropSettings::default().friction)]
     friction: f64,
     /// Restitution between part and belt.
-    #[arg(long, default_value_t = DropSettings::default().restitution)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DropSettings::default().restitution)]
     restitution: f64,
     /// Collision epsilon ε_c (m); default 1e-3 of the part's diameter.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     epsilon: Option<f64>,
     /// Largest tilt of a belt drop's start away from its rest pose (degrees).
-    #[arg(long, default_value_t = DropSettings::default().jitter_degrees)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DropSettings::default().jitter_degrees)]
     jitter: f64,
     /// Every drop starts uniform on SO(3): no belt drops, no belt-fed estimate.
     #[arg(long)]
     uniform_only: bool,
     /// A drop not at rest after this long (simulated s) is counted as unsettled.
-    #[arg(long, default_value_t = DropSettings::default().max_time)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DropSettings::default().max_time)]
     max_time: f64,
     /// Random seed: drop i's start depends only on (seed, i).
     #[arg(long, default_value_t = 1)]
@@ -63,10 +63,10 @@ pub struct PosesArgs {
     #[arg(long, conflicts_with_all = ["shard", "out"])]
     from: Option<PathBuf>,
     /// Half-angle of the perturbed quasi-static estimate's cone (degrees; the thesis used 20).
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 20.0)]
     cone: f64,
     /// Confidence level of the intervals.
-    #[arg(long, default_value_t = 0.95)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.95)]
     confidence: f64,
 }
 
