@@ -60,7 +60,10 @@ pub struct PosesArgs {
     out: Option<PathBuf>,
     /// Summarise the drops of this JSON file (a run's or a merge's `--out`) instead of
     /// dropping.
-    #[arg(long, conflicts_with_all = ["shard", "out"])]
+    #[arg(long, conflicts_with_all = [
+        "shard", "out", "drops", "height", "exit_speed", "friction", "restitution", "epsilon",
+        "jitter", "uniform_only", "max_time", "seed", "threads",
+    ])]
     from: Option<PathBuf>,
     /// Half-angle of the perturbed quasi-static estimate's cone (degrees; the thesis used 20).
     #[arg(long, allow_negative_numbers = true, default_value_t = 20.0)]
@@ -128,7 +131,7 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
             let threads = args
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            let mine = (0..args.drops).filter(|&i| shard.owns(i)).count() as u64;
+            let mine = shard.drops_of(args.drops);
             let tty = std::io::stderr().is_terminal();
             let progress = |done: u64| {
                 if tty && (done == mine || done % 10 == 0) {
@@ -147,6 +150,7 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
                 settings,
                 seed: args.seed,
                 drops: args.drops,
+                stable: StudyFile::fingerprint(&part),
                 outcomes,
             };
             if let Some(out) = &args.out {
@@ -155,12 +159,12 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
             (file, true)
         }
     };
-    if file.part != part.name {
+    if file.part != part.name || file.stable != StudyFile::fingerprint(&part) {
         return Err(format!(
-            "{}: its drops are of part \"{}\", not \"{}\"",
+            "{}: its drops are of part \"{}\", not of this \"{}\" (another part, or the part file changed: its stable facets or their solid angles differ)",
             args.from.as_deref().unwrap_or(Path::new("")).display(),
             file.part,
-            part.name
+            part.name,
         ));
     }
     let wall = started.elapsed().as_secs_f64();
@@ -202,6 +206,13 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
             summary.drops as f64 / wall.max(1e-9)
         );
     }
+    let interval = |x: f64| {
+        if x.is_finite() {
+            format!("{:5.1}", 100.0 * x)
+        } else {
+            "    –".to_string()
+        }
+    };
     let pct = |x: f64| {
         if x.is_finite() {
             format!("{:6.2} %", 100.0 * x)
@@ -218,7 +229,7 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
     for r in &summary.rows {
         let _ = writeln!(
             t,
-            "{:>4}  {:>6}  ({:>6.3}, {:>6.3}, {:>6.3})  {}      {}         {}  [{:5.1}, {:5.1}] %   {}  {:>5}",
+            "{:>4}  {:>6}  ({:>6.3}, {:>6.3}, {:>6.3})  {}      {}         {}  [{}, {}] %   {}  {:>5}",
             r.pose,
             r.facets.len(),
             r.normal[0],
@@ -227,8 +238,8 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
             pct(r.quasi_static),
             pct(r.perturbed),
             pct(r.uniform),
-            100.0 * r.interval.0,
-            100.0 * r.interval.1,
+            interval(r.interval.0),
+            interval(r.interval.1),
             r.belt_fed.map_or_else(|| "     –  ".into(), pct),
             r.uniform_count
         );

@@ -107,7 +107,21 @@ fn shards_merged_equal_the_whole_run_byte_for_byte() {
         "--from",
         whole.to_str().unwrap(),
     ]);
-    assert!(!ok && err.contains("not \"cube\""), "{err}");
+    assert!(!ok && err.contains("not of this \"cube\""), "{err}");
+    // The same name with another shape is refused too: the file records the stable facets.
+    let dir2 = common::Scratch::new("poses-renamed");
+    std::fs::write(
+        dir2.join("box-1x2x3.ron"),
+        "Part(name: \"box-1x2x3\", shape: Box(half_extents: (0.005, 0.01, 0.02)))",
+    )
+    .unwrap();
+    let (ok, _, err) = impulse(&[
+        "poses",
+        dir2.join("box-1x2x3.ron").to_str().unwrap(),
+        "--from",
+        whole.to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("part file changed"), "{err}");
 }
 
 #[test]

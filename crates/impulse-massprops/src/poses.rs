@@ -251,12 +251,12 @@ impl PoseAnalysis {
     /// moved is not perturbed again. `half_angle = 0` gives the quasi-static estimate.
     ///
     /// # Errors
-    /// [`MassError::NotPositive`] unless `0 ≤ half_angle < π/2`.
+    /// [`MassError::InvalidStatistic`] unless `0 ≤ half_angle < π/2`.
     pub fn perturbed_quasi_static(&self, half_angle: f64) -> Result<Vec<f64>, MassError> {
         if !(0.0..std::f64::consts::FRAC_PI_2).contains(&half_angle) {
-            return Err(MassError::NotPositive {
-                name: "cone half-angle (must be in [0, π/2) rad)",
-                value: half_angle,
+            return Err(MassError::InvalidStatistic {
+                name: "cone half-angle",
+                reason: format!("{half_angle} rad is not in [0, π/2)"),
             });
         }
         let q = self.quasi_static();

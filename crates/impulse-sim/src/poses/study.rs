@@ -123,6 +123,15 @@ impl Shard {
     pub fn owns(&self, i: u64) -> bool {
         i % self.count == self.index
     }
+
+    /// How many of a study's `drops` drops are this shard's.
+    pub fn drops_of(&self, drops: u64) -> u64 {
+        if self.index >= drops {
+            0
+        } else {
+            (drops - self.index).div_ceil(self.count)
+        }
+    }
 }
 
 impl FromStr for Shard {
@@ -179,8 +188,24 @@ pub struct StudyFile {
     pub seed: u64,
     /// Number of drops of the whole study (all shards).
     pub drops: u64,
+    /// The part's stable facets as the study saw them, (hull face, solid angle): a file read
+    /// back for another part, or for an edited part of the same name, is refused on them
+    /// ([`StudyFile::fingerprint`]).
+    pub stable: Vec<(u32, f64)>,
     /// Outcomes, sorted by index (one shard's, or all).
     pub outcomes: Vec<DropOutcome>,
+}
+
+impl StudyFile {
+    /// The part's fingerprint a study file records: its stable facets with their solid
+    /// angles (exact in the file: numbers are read back bit for bit).
+    pub fn fingerprint(part: &PosePart) -> Vec<(u32, f64)> {
+        part.analysis
+            .stable()
+            .into_iter()
+            .map(|f| (f, part.analysis.facets()[f as usize].solid_angle))
+            .collect()
+    }
 }
 
 /// SplitMix64's output function: a well-mixed 64-bit value from `x`.
@@ -241,8 +266,19 @@ fn template(part: &PosePart, s: &DropSettings) -> Result<(World, BodyHandle), Si
         .at([0.0, 0.0, -thick])
         .with_motion(MotionDesc::Fixed),
     )?;
+    // Parked clear above the belt (its own frame's origin may lie anywhere in the part).
     let mut body = part.body.clone();
-    body.position = [0.0, 0.0, s.height + 2.0 * part.diameter];
+    let parked = part.own_frame_pose(
+        part.centre_at_height(DQuat::IDENTITY, s.height + 2.0 * part.diameter),
+        DQuat::IDENTITY,
+    );
+    body.position = parked.translation.to_array();
+    body.rotation = crate::scene::RotationDesc::Quaternion(
+        parked.rotation.x,
+        parked.rotation.y,
+        parked.rotation.z,
+        parked.rotation.w,
+    );
     let h = world.add_body(&body)?;
     Ok((world, h))
 }
@@ -275,8 +311,12 @@ fn drop_once(
     })?;
     let rotation = b.pose.rotation;
     let down = rotation.inverse() * world.gravity().normalize_or(DVec3::NEG_Z);
+    // At rest on an unstable facet (one the centre of mass projects onto within rounding of
+    // its edge) is not a pose: counted as unclassified.
     let facet = if settled {
-        part.analysis.facet_facing(down, FACET_ANGLE)
+        part.analysis
+            .facet_facing(down, FACET_ANGLE)
+            .filter(|&f| part.analysis.facets()[f as usize].stable)
     } else {
         None
     };
@@ -352,9 +392,11 @@ pub fn run_drops(
     template(part, settings)?;
     let stable = part.analysis.stable();
     let done = AtomicU64::new(0);
-    let mine: Vec<u64> = (0..drops).filter(|&i| shard.owns(i)).collect();
+    let mine = shard.drops_of(drops);
     pool.install(|| {
-        mine.into_par_iter()
+        (0..mine)
+            .into_par_iter()
+            .map(|j| shard.index + j * shard.count)
             .map_init(
                 || template(part, settings).ok(),
                 |world, i| {
@@ -428,13 +470,13 @@ pub fn run_thesis_feedback(
     Ok(out)
 }
 
-/// Power iterations of the belt-fed estimate stop when an iteration changes the estimate by
-/// less than this (sum of absolute changes). Default `1e-13`.
-const BELT_FED_TOLERANCE: f64 = 1e-13;
+/// The belt-fed estimate's repeated squaring of the chain stops when a squaring changes no
+/// entry by more than this. Default `1e-15`.
+const BELT_FED_TOLERANCE: f64 = 1e-15;
 
-/// Most power iterations of the belt-fed estimate: a chain that mixes this slowly (a part
-/// that almost never leaves a pose) is reported as it stands. Default `1_000_000`.
-const BELT_FED_MAX_ITERATIONS: usize = 1_000_000;
+/// Most squarings of the belt-fed chain: 2⁶⁰ steps, the limit for any chain that leaves a
+/// pose at all (a part that never leaves one keeps its share). Default `60`.
+const BELT_FED_SQUARINGS: usize = 60;
 
 /// One pose's line of a study's summary: a class of stable facets the part cannot tell
 /// apart ([`impulse_massprops::PoseAnalysis::classes`]: the six faces of a cube are one
@@ -459,8 +501,8 @@ pub struct PoseRow {
     /// The binomial interval of [`Self::uniform`] (low, high).
     pub interval: (f64, f64),
     /// The belt-fed dynamic estimate: the long-run share of this pose when each drop starts
-    /// from the pose the last one ended in (the thesis's feedback of final poses to initial
-    /// ones), from the transition frequencies of the belt drops.
+    /// from a rest pose drawn from the final poses so far (the thesis's feedback of final
+    /// poses to initial ones), from the transition frequencies of the belt drops.
     pub belt_fed: Option<f64>,
 }
 
@@ -519,6 +561,9 @@ pub fn summarize(
     if outcomes.is_empty() {
         return Err(bad("outcomes", "no drops to summarise".into()));
     }
+    if !(confidence > 0.0 && confidence < 1.0) {
+        return Err(bad("confidence", format!("{confidence} is not in (0, 1)")));
+    }
     let qs = part.analysis.quasi_static();
     let pqs = part
         .analysis
@@ -560,10 +605,13 @@ pub fn summarize(
         .iter()
         .any(|r| r.iter().any(|&c| c > 0))
         .then(|| {
-            let start: Vec<f64> = if uniform_drops > 0 {
+            // The uniform drops that came to rest on a stable facet (unsettled ones carry no
+            // pose into the loop).
+            let classified: u64 = uniform_counts.iter().sum();
+            let start: Vec<f64> = if classified > 0 {
                 uniform_counts
                     .iter()
-                    .map(|&c| c as f64 / uniform_drops as f64)
+                    .map(|&c| c as f64 / classified as f64)
                     .collect()
             } else {
                 stable.iter().map(|&f| qs[f as usize]).collect()
@@ -618,7 +666,7 @@ pub fn summarize(
 
 /// The long-run distribution of the lazy chain (I + T)/2 from `p` (see [`summarize`]); a row
 /// with no drops keeps its share.
-pub(super) fn belt_fed_limit(counts: &[Vec<u64>], mut p: Vec<f64>) -> Vec<f64> {
+pub(super) fn belt_fed_limit(counts: &[Vec<u64>], p: Vec<f64>) -> Vec<f64> {
     let m = counts.len();
     let t: Vec<Vec<f64>> = counts
         .iter()
@@ -637,17 +685,29 @@ pub(super) fn belt_fed_limit(counts: &[Vec<u64>], mut p: Vec<f64>) -> Vec<f64> {
                 .collect()
         })
         .collect();
-    for _ in 0..BELT_FED_MAX_ITERATIONS {
-        let next: Vec<f64> = (0..m)
-            .map(|b| (0..m).map(|a| p[a] * t[a][b]).sum())
+    // The limit of p·T'ᵏ by repeated squaring: after j squarings T' stands for 2^j steps.
+    let mut t = t;
+    for _ in 0..BELT_FED_SQUARINGS {
+        let next: Vec<Vec<f64>> = (0..m)
+            .map(|a| {
+                (0..m)
+                    .map(|b| (0..m).map(|k| t[a][k] * t[k][b]).sum())
+                    .collect()
+            })
             .collect();
-        let change: f64 = next.iter().zip(&p).map(|(x, y)| (x - y).abs()).sum();
-        p = next;
+        let change = next
+            .iter()
+            .zip(&t)
+            .flat_map(|(x, y)| x.iter().zip(y).map(|(u, v)| (u - v).abs()))
+            .fold(0.0, f64::max);
+        t = next;
         if change < BELT_FED_TOLERANCE {
             break;
         }
     }
-    p
+    (0..m)
+        .map(|b| (0..m).map(|a| p[a] * t[a][b]).sum())
+        .collect()
 }
 
 /// Merges shard files of one study into the file of the whole study.
@@ -665,13 +725,29 @@ pub fn merge(files: &[StudyFile]) -> Result<StudyFile, SimError> {
         .first()
         .ok_or_else(|| bad("no files to merge".into()))?;
     for (k, f) in files.iter().enumerate().skip(1) {
-        if (f.part.as_str(), f.settings, f.seed, f.drops)
-            != (first.part.as_str(), first.settings, first.seed, first.drops)
+        if (f.part.as_str(), f.settings, f.seed, f.drops, &f.stable)
+            != (
+                first.part.as_str(),
+                first.settings,
+                first.seed,
+                first.drops,
+                &first.stable,
+            )
         {
             return Err(bad(format!(
-                "file {k} is of another study (part, settings, seed or drops differ from file 0)"
+                "file {k} is of another study (part, stable facets, settings, seed or drops differ from file 0)"
             )));
         }
+    }
+    if let Some(o) = files
+        .iter()
+        .flat_map(|f| &f.outcomes)
+        .find(|o| o.index >= first.drops)
+    {
+        return Err(bad(format!(
+            "drop {} is beyond the study's {} drops",
+            o.index, first.drops
+        )));
     }
     let mut outcomes: Vec<DropOutcome> = files
         .iter()

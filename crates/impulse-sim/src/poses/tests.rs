@@ -41,6 +41,7 @@ fn drops_are_identical_for_any_thread_count_and_shard_split() {
         settings: s,
         seed: 7,
         drops: 12,
+        stable: StudyFile::fingerprint(&part),
         outcomes,
     };
     let shards: Vec<StudyFile> = [2, 0, 1]
@@ -275,4 +276,77 @@ fn thesis_feedback_starts_from_earlier_rest_poses() {
         );
     }
     assert_eq!(run_thesis_feedback(&part, &s, 4, n, &|_| {}).unwrap(), seq);
+}
+
+/// The summary against hand counts: 10 uniform drops (6 on the first 2 × 3 face, 3 on the
+/// other, 1 unsettled) and belt drops that swap the two 2 × 3 faces half the time. The uniform
+/// column counts all 10 drops (0.6, 0.3 and an unsettled one); the belt-fed shares start from
+/// the 9 classified drops and sum to 1; the symmetric swap makes them ½, ½.
+#[test]
+fn summary_counts_and_the_belt_fed_shares_sum_to_one() {
+    let part = fixture("box-1x2x3.ron");
+    let big: Vec<u32> = part
+        .analysis
+        .facets()
+        .iter()
+        .filter(|f| part.normal_in_part_frame(f.face).x.abs() > 0.5)
+        .map(|f| f.face)
+        .collect();
+    let (a, b) = (big[0], big[1]);
+    let drop = |index: u64, start: Option<u32>, facet: Option<u32>| DropOutcome {
+        index,
+        start,
+        facet,
+        settled: facet.is_some(),
+        time: 1.0,
+        rotation: [0.0, 0.0, 0.0, 1.0],
+    };
+    let mut out: Vec<DropOutcome> = (0..6).map(|i| drop(i, None, Some(a))).collect();
+    out.extend((6..9).map(|i| drop(i, None, Some(b))));
+    out.push(drop(9, None, None));
+    for (k, (from, to)) in [(a, a), (a, b), (b, b), (b, a)].into_iter().enumerate() {
+        out.push(drop(10 + k as u64, Some(from), Some(to)));
+    }
+    let s = summarize(&part, &out, 0.3, 0.95).unwrap();
+    assert_eq!(
+        (s.drops, s.uniform_drops, s.unsettled, s.unclassified),
+        (14, 10, 1, 0)
+    );
+    let row = s.rows.iter().find(|r| r.facets.contains(&a)).unwrap();
+    assert_eq!(row.facets.len(), 2, "the two 2 × 3 faces are one pose");
+    assert_eq!(row.uniform_count, 9);
+    assert!((row.uniform - 0.9).abs() < 1e-15);
+    let belt: f64 = s.rows.iter().map(|r| r.belt_fed.unwrap()).sum();
+    assert!((belt - 1.0).abs() < 1e-12, "belt-fed shares sum to {belt}");
+    assert!((row.belt_fed.unwrap() - 1.0).abs() < 1e-12);
+    assert!(summarize(&part, &out, 0.3, 1.5).is_err());
+    assert!(summarize(&part, &[], 0.3, 0.95).is_err());
+}
+
+/// A part whose own frame's origin lies far from its geometry (a piece placed 0.2 m below
+/// it; its half sizes decrease along x, y, z so that its principal frame is its own frame and
+/// the offset stays below) is dropped like any other: the world parks it by its geometry, not
+/// by its origin (parked by its origin at 0.195 m, it overlapped the belt by 1 cm).
+#[test]
+fn a_part_far_from_its_frame_origin_is_dropped() {
+    let desc = PartFileDesc {
+        name: Some("offset".into()),
+        shape: ShapeDesc::Compound {
+            parts: vec![crate::scene::PartDesc {
+                shape: ShapeDesc::Box {
+                    half_extents: [0.015, 0.01, 0.005],
+                },
+                position: [0.0, 0.0, -0.2],
+                rotation: crate::scene::RotationDesc::Identity,
+            }],
+        },
+        mass: Some(MassDesc::Density(1000.0)),
+        point_masses: vec![],
+    };
+    let part = PosePart::new(&desc, &parts_dir()).unwrap();
+    let out = run_drops(&part, &quick(), 2, 4, Shard::ALL, 1, &|_| {}).unwrap();
+    assert!(
+        out.iter().all(|o| o.settled && o.facet.is_some()),
+        "{out:?}"
+    );
 }
