@@ -65,6 +65,10 @@ pub struct PosesArgs {
         "jitter", "uniform_only", "max_time", "seed", "threads",
     ])]
     from: Option<PathBuf>,
+    /// Print the scene (RON) of drop N of this study instead of running it: `impulse run` on
+    /// the saved scene replays that drop exactly, with plots and a trajectory.
+    #[arg(long, value_name = "N", conflicts_with_all = ["shard", "out", "from"])]
+    scene: Option<u64>,
     /// Half-angle of the perturbed quasi-static estimate's cone (degrees; the thesis used 20).
     #[arg(long, allow_negative_numbers = true, default_value_t = 20.0)]
     cone: f64,
@@ -115,6 +119,22 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
         return Err(format!(
             "--confidence {}: must be in (0, 1)",
             args.confidence
+        ));
+    }
+    if let Some(n) = args.scene {
+        if n >= args.drops {
+            return Err(format!(
+                "--scene {n}: the study has drops 0 to {}",
+                args.drops.saturating_sub(1)
+            ));
+        }
+        let desc = poses::drop_scene(&part, &settings, args.seed, n).map_err(|e| e.to_string())?;
+        let text =
+            ron::ser::to_string_pretty(&desc, ron::ser::PrettyConfig::default().struct_names(true))
+                .map_err(|e| e.to_string())?;
+        return Ok(format!(
+            "// Drop {n} of a study of \"{}\" (seed {}): `impulse run` on this file replays it.\n{text}",
+            part.name, args.seed
         ));
     }
     let shard = match &args.shard {

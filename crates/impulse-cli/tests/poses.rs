@@ -138,9 +138,40 @@ fn malformed_arguments_are_refused() {
         (vec!["poses", b, "--confidence", "1.5"], "--confidence"),
         (vec!["poses"], "a part file is needed"),
         (vec!["poses", "no-such-part.ron"], "cannot read"),
+        (
+            vec!["poses", b, "--drops", "10", "--scene", "10"],
+            "drops 0 to 9",
+        ),
     ] {
         let (ok, _, err) = impulse(&args);
         assert!(!ok, "{args:?} was accepted");
         assert!(err.contains(says), "{args:?}: {err}");
     }
+}
+
+/// `--scene N` prints a scene file that `impulse run` accepts and runs to its end, with the
+/// part at rest there.
+#[test]
+fn a_drops_scene_runs_in_impulse_run() {
+    let dir = common::Scratch::new("poses-scene");
+    let b = part("box-1x2x3.ron");
+    let (ok, text, err) = impulse(&[
+        "poses",
+        b.to_str().unwrap(),
+        "--scene",
+        "3",
+        "--max-time",
+        "3",
+    ]);
+    assert!(ok, "{err}");
+    assert!(text.contains("box-1x2x3-drop-3"), "{text}");
+    let file = dir.join("drop.ron");
+    std::fs::write(&file, text).unwrap();
+    let (ok, out, err) = impulse(&["run", file.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(out.contains("simulated time:   3 s"), "{out}");
+    assert!(
+        out.contains("0.000000e0 at end"),
+        "the part is at rest: {out}"
+    );
 }

@@ -5,7 +5,7 @@
 //! A drop is one small world: a fixed belt (the plane z = 0, a large box) and the part,
 //! released with its lowest point at [`DropSettings::height`] above the belt and a horizontal
 //! exit velocity [`DropSettings::exit_speed`] along x, in the switching contact model. The
-//! world is stepped in polls of [`REST_POLL`] until the part's island sleeps (at rest: the
+//! world is polled [`POLL_RATE`] times a second until the part's island sleeps (at rest: the
 //! switching model's sleep test, not a fixed long duration) or [`DropSettings::max_time`]
 //! passes. The final orientation is classified by
 //! [`impulse_massprops::PoseAnalysis::facet_facing`] within [`FACET_ANGLE`].
@@ -39,14 +39,14 @@ mod study;
 
 pub use part::{PartFileDesc, PosePart};
 pub use study::{
-    DropOutcome, DropSettings, PoseRow, PoseSummary, Shard, StudyFile, THESIS_PILOT, merge,
-    run_drops, run_thesis_feedback, summarize,
+    DropOutcome, DropSettings, PoseRow, PoseSummary, Shard, StudyFile, THESIS_PILOT, drop_scene,
+    merge, run_drops, run_thesis_feedback, summarize,
 };
 
-/// The world is stepped in polls of this length (s) while waiting for the part to sleep.
-/// Default `0.05`: the switching model needs an island still for half a second to sleep, so
-/// a finer poll would only add calls.
-pub const REST_POLL: f64 = 0.05;
+/// The world is polled this many times per simulated second while waiting for the part to
+/// sleep (the frame rate of a drop's scene, [`drop_scene`]). Default `20`: the switching model
+/// needs an island still for half a second to sleep, so a finer poll would only add calls.
+pub const POLL_RATE: f64 = 20.0;
 
 /// A part at rest is on the facet whose normal is within this angle (rad) of straight down;
 /// default `0.02` (1.1°). At rest on a flat belt the tilt is at most about ε_c over the part's

@@ -128,7 +128,8 @@ impl PosePart {
     /// for a centre of mass outside the part's convex hull.
     pub fn new(desc: &PartFileDesc, base_dir: &Path) -> Result<Self, SimError> {
         let name = desc.name.clone().unwrap_or_else(|| "part".into());
-        let mut body = BodyDesc::new(name.clone(), desc.shape.clone());
+        // OBJ paths made absolute: a drop's scene (`drop_scene`) may be saved anywhere.
+        let mut body = BodyDesc::new(name.clone(), absolute_paths(&desc.shape, base_dir));
         body.mass = desc.mass;
         body.point_masses = desc.point_masses.clone();
         body.validate(0)?;
@@ -202,5 +203,30 @@ impl PosePart {
     /// [`World::set_pose`] takes.
     pub(crate) fn own_frame_pose(&self, centre: DVec3, rotation: DQuat) -> Pose {
         Pose::new(rotation, centre) * self.frame
+    }
+}
+
+/// `shape` with every OBJ path (of it or its compound's parts) resolved against `base`.
+fn absolute_paths(shape: &ShapeDesc, base: &Path) -> ShapeDesc {
+    match shape {
+        ShapeDesc::Obj { path } => {
+            let joined = base.join(path);
+            ShapeDesc::Obj {
+                path: std::path::absolute(&joined)
+                    .unwrap_or(joined)
+                    .to_string_lossy()
+                    .into_owned(),
+            }
+        }
+        ShapeDesc::Compound { parts } => ShapeDesc::Compound {
+            parts: parts
+                .iter()
+                .map(|p| crate::scene::PartDesc {
+                    shape: absolute_paths(&p.shape, base),
+                    ..p.clone()
+                })
+                .collect(),
+        },
+        other => other.clone(),
     }
 }

@@ -11,10 +11,10 @@ use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::{EPSILON_REL, FACET_ANGLE, PosePart, REST_POLL};
+use super::{EPSILON_REL, FACET_ANGLE, POLL_RATE, PosePart};
 use crate::SimError;
-use crate::scene::{BodyDesc, MotionDesc, ShapeDesc};
-use crate::world::{BodyHandle, Material, World, WorldSettings};
+use crate::scene::{BodyDesc, ContactDesc, MotionDesc, RotationDesc, Scene, SceneDesc, ShapeDesc};
+use crate::world::{Material, World};
 
 /// The belt reaches this many part diameters from the drop point, plus the distance the exit
 /// velocity carries the part in [`DropSettings::max_time`]: far enough that no part leaves it.
@@ -243,68 +243,111 @@ fn uniform_direction(rng: &mut Xoshiro256PlusPlus) -> DVec3 {
     DVec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
-/// The world of a drop, with the part somewhere above the belt (placed per drop).
-fn template(part: &PosePart, s: &DropSettings) -> Result<(World, BodyHandle), SimError> {
-    let mut settings =
-        WorldSettings::new(s.collision_epsilon.unwrap_or(EPSILON_REL * part.diameter));
-    settings.default_contact = Material {
+/// The scene of one drop from the body-frame orientation `start`: the belt and the part at
+/// its release pose and velocity, frames at the drop's poll rate ([`POLL_RATE`]), lasting
+/// [`DropSettings::max_time`]. [`drop_once`] builds its world from this very scene and steps
+/// it as `impulse run` does, so `impulse run` on it replays the drop.
+fn scene_of(part: &PosePart, s: &DropSettings, start: DQuat, name: String) -> SceneDesc {
+    let mut d = SceneDesc::new();
+    d.name = name;
+    d.description = format!(
+        "a drop of part \"{}\" on a belt (impulse poses); it ends when the part sleeps",
+        part.name
+    );
+    d.duration = Some(s.max_time);
+    d.collision_epsilon = s.collision_epsilon.unwrap_or(EPSILON_REL * part.diameter);
+    d.output_rate = POLL_RATE;
+    d.default_contact = ContactDesc {
         friction: s.friction,
         restitution: s.restitution,
     };
-    settings.base_dir.clone_from(&part.base_dir);
-    let mut world = World::new(settings)?;
-    world.set_parallel_min_bodies(usize::MAX);
     let reach = BELT_REACH_DIAMETERS * part.diameter + s.exit_speed * s.max_time + s.height;
     let thick = part.diameter.max(1e-3);
-    world.add_body(
-        &BodyDesc::new(
-            "belt",
-            ShapeDesc::Box {
-                half_extents: [reach, reach, thick],
-            },
-        )
-        .at([0.0, 0.0, -thick])
-        .with_motion(MotionDesc::Fixed),
-    )?;
-    // Parked clear above the belt (its own frame's origin may lie anywhere in the part).
+    let belt = BodyDesc::new(
+        belt_name(part),
+        ShapeDesc::Box {
+            half_extents: [reach, reach, thick],
+        },
+    )
+    .at([0.0, 0.0, -thick])
+    .with_motion(MotionDesc::Fixed);
+    let own = part.own_frame_pose(part.centre_at_height(start, s.height), start);
     let mut body = part.body.clone();
-    let parked = part.own_frame_pose(
-        part.centre_at_height(DQuat::IDENTITY, s.height + 2.0 * part.diameter),
-        DQuat::IDENTITY,
+    body.position = own.translation.to_array();
+    body.rotation = RotationDesc::Quaternion(
+        own.rotation.x,
+        own.rotation.y,
+        own.rotation.z,
+        own.rotation.w,
     );
-    body.position = parked.translation.to_array();
-    body.rotation = crate::scene::RotationDesc::Quaternion(
-        parked.rotation.x,
-        parked.rotation.y,
-        parked.rotation.z,
-        parked.rotation.w,
-    );
-    let h = world.add_body(&body)?;
-    Ok((world, h))
+    body.velocity = [s.exit_speed, 0.0, 0.0];
+    d.bodies = vec![belt, body];
+    d
 }
 
-/// Runs one drop from the body-frame orientation `start` in a copy of `template`'s world and
-/// returns its outcome.
+/// The belt's body name: `belt`, unless the part has that name.
+fn belt_name(part: &PosePart) -> &'static str {
+    if part.name == "belt" {
+        "the-belt"
+    } else {
+        "belt"
+    }
+}
+
+/// The scene of drop `index` of a study (the start [`run_drops`] gives it): `impulse run` on
+/// it replays that drop, step for step.
+///
+/// # Errors
+/// [`SimError::Invalid`] for bad settings.
+pub fn drop_scene(
+    part: &PosePart,
+    settings: &DropSettings,
+    seed: u64,
+    index: u64,
+) -> Result<SceneDesc, SimError> {
+    settings.validate()?;
+    let (start, _) = start_of(part, settings, &part.analysis.stable(), seed, index);
+    Ok(scene_of(
+        part,
+        settings,
+        start,
+        format!("{}-drop-{index}", part.name),
+    ))
+}
+
+/// Runs one drop from the body-frame orientation `start` and returns its outcome: its world
+/// is built from [`scene_of`] and polled at the scene's frame times until the part sleeps.
 fn drop_once(
     part: &PosePart,
     s: &DropSettings,
-    template: &(World, BodyHandle),
     index: u64,
     (start, from): (DQuat, Option<u32>),
 ) -> Result<DropOutcome, SimError> {
-    let (mut world, h) = (template.0.clone(), template.1);
-    let centre = part.centre_at_height(start, s.height);
-    let own = part.own_frame_pose(centre, start);
-    world.set_pose(h, own.translation, own.rotation)?;
-    world.set_velocity(h, DVec3::new(s.exit_speed, 0.0, 0.0), DVec3::ZERO)?;
+    let desc = scene_of(part, s, start, part.name.clone());
+    let mut world = World::from_scene(&Scene {
+        desc,
+        base_dir: part.base_dir.clone(),
+    })?;
+    world.set_parallel_min_bodies(usize::MAX);
+    let h = world
+        .handle(&part.name)
+        .ok_or_else(|| SimError::UnknownBody {
+            handle: part.name.clone(),
+        })?;
     let mut settled = false;
-    while world.time() < s.max_time {
-        let until = (world.time() + REST_POLL).min(s.max_time);
-        world.step_until(until)?;
+    // The frame times of `crate::run` at the scene's rate, so that a replay steps alike.
+    let mut k = 1u64;
+    loop {
+        let t = (k as f64 / POLL_RATE).min(s.max_time);
+        world.step_until(t)?;
         if world.body(h).is_some_and(|b| b.is_asleep()) {
             settled = true;
             break;
         }
+        if t >= s.max_time {
+            break;
+        }
+        k += 1;
     }
     let b = world.body(h).ok_or_else(|| SimError::UnknownBody {
         handle: format!("{h:?}"),
@@ -387,9 +430,11 @@ pub fn run_drops(
             time: 0.0,
             message: format!("thread pool: {e}"),
         })?;
-    // Built once here to report its errors; each worker builds its own copy (a world holds
-    // controllers, which are not shared between threads).
-    template(part, settings)?;
+    // Drop 0's world, built once here to report a scene's errors before the workers start.
+    World::from_scene(&Scene {
+        desc: scene_of(part, settings, DQuat::IDENTITY, part.name.clone()),
+        base_dir: part.base_dir.clone(),
+    })?;
     let stable = part.analysis.stable();
     let done = AtomicU64::new(0);
     let mine = shard.drops_of(drops);
@@ -397,25 +442,15 @@ pub fn run_drops(
         (0..mine)
             .into_par_iter()
             .map(|j| shard.index + j * shard.count)
-            .map_init(
-                || template(part, settings).ok(),
-                |world, i| {
-                    let named = |e: SimError| SimError::Runtime {
-                        time: 0.0,
-                        message: format!("drop {i}: {e}"),
-                    };
-                    let world = world.as_ref().ok_or_else(|| {
-                        named(SimError::Runtime {
-                            time: 0.0,
-                            message: "the drop's world could not be built".into(),
-                        })
-                    })?;
-                    let start = start_of(part, settings, &stable, seed, i);
-                    let out = drop_once(part, settings, world, i, start).map_err(named)?;
-                    progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-                    Ok(out)
-                },
-            )
+            .map(|i| {
+                let start = start_of(part, settings, &stable, seed, i);
+                let out = drop_once(part, settings, i, start).map_err(|e| SimError::Runtime {
+                    time: 0.0,
+                    message: format!("drop {i}: {e}"),
+                })?;
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                Ok(out)
+            })
             .collect()
     })
 }
@@ -442,7 +477,6 @@ pub fn run_thesis_feedback(
     progress: &dyn Fn(u64),
 ) -> Result<Vec<DropOutcome>, SimError> {
     settings.validate()?;
-    let world = template(part, settings)?;
     let mut out: Vec<DropOutcome> = Vec::new();
     for i in 0..drops {
         let mut rng = stream(seed, i);
@@ -460,7 +494,7 @@ pub fn run_thesis_feedback(
                 from.facet,
             )
         };
-        let o = drop_once(part, settings, &world, i, start).map_err(|e| SimError::Runtime {
+        let o = drop_once(part, settings, i, start).map_err(|e| SimError::Runtime {
             time: 0.0,
             message: format!("drop {i}: {e}"),
         })?;
