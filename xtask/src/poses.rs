@@ -154,12 +154,13 @@ pub fn run(out: &Path) -> Result<()> {
     println!(
         "\nthick coin, edge share ({COIN_DROPS} uniform starts on SO(3) per height, rolling after {COIN_MAX_TIME} s counted apart):"
     );
+    let qs = coin.analysis.quasi_static();
     let qs_edge: f64 = coin
         .analysis
         .facets()
         .iter()
         .filter(|f| coin.normal_in_part_frame(f.face).z.abs() < 0.5)
-        .map(|f| coin.analysis.quasi_static()[f.face as usize])
+        .map(|f| qs[f.face as usize])
         .sum();
     println!("  quasi-static: {:.2} %", 100.0 * qs_edge);
     for height in COIN_HEIGHTS {

@@ -4,6 +4,7 @@
 mod common;
 
 use common::Scratch;
+use common::impulse_text as impulse;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -13,18 +14,6 @@ fn scenes() -> PathBuf {
 
 fn temp_dir(name: &str) -> Scratch {
     Scratch::new(&format!("run-{name}"))
-}
-
-fn impulse(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_impulse"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 /// The two-ball scene: e = 0.6, v0 = 2 m/s, equal balls, no friction, no gravity. The summary

@@ -86,6 +86,8 @@ pub struct PoseAnalysis {
     /// (from corner k to corner k + 1).
     neighbours: Vec<Vec<u32>>,
     com: DVec3,
+    /// The hull's bounding-box diagonal.
+    size: f64,
 }
 
 impl PoseAnalysis {
@@ -163,6 +165,7 @@ impl PoseAnalysis {
             corners,
             neighbours,
             com,
+            size,
         })
     }
 
@@ -188,7 +191,7 @@ impl PoseAnalysis {
     /// without a symmetry is possible in principle, so this is a reading aid, not a proof.
     /// Classes are ordered by their first facet; facets in increasing order.
     pub fn classes(&self) -> Vec<Vec<u32>> {
-        let size = diameter(&self.corners.iter().flatten().copied().collect::<Vec<_>>());
+        let size = self.size;
         let tol = CLASS_REL * size;
         let signature = |f: &RestingFacet| {
             let c = &self.corners[f.face as usize];
@@ -226,6 +229,12 @@ impl PoseAnalysis {
     /// The centre of mass the analysis was made with.
     pub fn com(&self) -> DVec3 {
         self.com
+    }
+
+    /// The hull's size: the diagonal of its axis-aligned bounding box (the scale of this
+    /// module's relative tolerances).
+    pub fn diameter(&self) -> f64 {
+        self.size
     }
 
     /// The facet's corners (part frame), counter-clockwise seen from outside.
@@ -292,8 +301,7 @@ impl PoseAnalysis {
     }
 }
 
-/// Largest distance between two of `points` along the coordinate axes' bounding box
-/// diagonal (a size scale for tolerances).
+/// The diagonal of the axis-aligned bounding box of `points` (a size scale for tolerances).
 fn diameter(points: &[DVec3]) -> f64 {
     let lo = points
         .iter()

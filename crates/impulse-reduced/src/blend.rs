@@ -166,6 +166,41 @@ pub fn scaled_norm(t: &Twist, r: f64) -> f64 {
     ((t.v / r).length_squared() + (t.w / core::f64::consts::PI).length_squared()).sqrt()
 }
 
+/// ξ̄ = log(H̄_e⁻¹ H_e) over the end effectors (eq. 24's displacement) and the elastic
+/// wrench K̄ ξ̄ it carries (§6: w = K ξ).
+pub(crate) fn elastic_wrench(ee: &[Pose], reference: &[Pose], stiffness: &Mat<f64>) -> Vec<f64> {
+    let xi: Vec<f64> = ee
+        .iter()
+        .zip(reference)
+        .flat_map(|(h, r)| (r.inverse() * *h).log().to_array())
+        .collect();
+    let n = xi.len();
+    (0..n)
+        .map(|r| (0..n).map(|c| stiffness[(r, c)] * xi[c]).sum())
+        .collect()
+}
+
+/// The first `rank` eigenvalues (decreasing) grouped into runs of (nearly) equal values,
+/// `(first, end)` index ranges: a value within [`CLUSTER_GAP`] times the largest eigenvalue's
+/// magnitude of its run's first joins the run (Algorithm 3's repeated eigenvalues).
+pub(crate) fn eigen_clusters(values: &[f64], rank: usize) -> Vec<(usize, usize)> {
+    let scale = values
+        .first()
+        .map_or(0.0, |v| v.abs())
+        .max(f64::MIN_POSITIVE);
+    let mut clusters = Vec::new();
+    let mut j = 0;
+    while j < rank {
+        let mut e = j + 1;
+        while e < rank && (values[e] - values[j]).abs() <= CLUSTER_GAP * scale {
+            e += 1;
+        }
+        clusters.push((j, e));
+        j = e;
+    }
+    clusters
+}
+
 /// Algorithm 3 (fixed; see the module doc): blends symmetric matrices from their
 /// decompositions with weights `alpha`, keeping the rank `rank` of the closest model
 /// (largest weight).
@@ -179,21 +214,7 @@ pub fn blend_rank1(eigs: &[&Eigen], mats: &[&Mat<f64>], alpha: &[f64], rank: usi
     let n = r0.vectors.nrows();
     let mut out = Mat::<f64>::zeros(n, n);
     // Clusters of (nearly) equal eigenvalues of the closest model.
-    let scale = r0
-        .values
-        .first()
-        .map_or(0.0, |v| v.abs())
-        .max(f64::MIN_POSITIVE);
-    let mut clusters: Vec<(usize, usize)> = Vec::new();
-    let mut j = 0;
-    while j < rank {
-        let mut e = j + 1;
-        while e < rank && (r0.values[e] - r0.values[j]).abs() <= CLUSTER_GAP * scale {
-            e += 1;
-        }
-        clusters.push((j, e));
-        j = e;
-    }
+    let clusters = eigen_clusters(&r0.values, rank);
     // Per model, which of its eigenvectors are taken (matching without replacement).
     let mut used: Vec<Vec<bool>> = (0..k).map(|_| vec![false; n]).collect();
     for &(j0, j1) in &clusters {
@@ -574,16 +595,7 @@ impl BlendedModel {
         reference: &[Pose],
         stiffness: &Mat<f64>,
     ) -> Vec<Pose> {
-        // ξ̄ = log(H̄_e⁻¹ H_e) and the blended elastic wrench K̄ ξ̄ (§6: w = K ξ).
-        let xi: Vec<f64> = ee
-            .iter()
-            .zip(reference)
-            .flat_map(|(h, r)| (r.inverse() * *h).log().to_array())
-            .collect();
-        let n = xi.len();
-        let w: Vec<f64> = (0..n)
-            .map(|r| (0..n).map(|c| stiffness[(r, c)] * xi[c]).sum())
-            .collect();
+        let w = elastic_wrench(ee, reference, stiffness);
         let c = closest(alpha);
         let (count, logs) = (self.models.len(), &self.cache(c).link_logs);
         (0..self.models[0].internal.len())

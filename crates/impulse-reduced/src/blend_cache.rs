@@ -17,7 +17,7 @@
 use faer::Mat;
 use impulse_geom::{Pose, Twist};
 
-use crate::blend::{CLUSTER_GAP, Eigen};
+use crate::blend::{Eigen, eigen_clusters};
 use crate::construct::ReducedModel;
 
 /// Algorithm 3's matching of every model onto the closest model's first `rank` eigenvectors,
@@ -87,7 +87,7 @@ impl ClosestCache {
 
 impl Matching {
     /// Algorithm 3's matching (fixed, see the `blend` module doc): the closest model's
-    /// eigenvalues grouped into clusters (relative gap [`CLUSTER_GAP`]); per cluster, per
+    /// eigenvalues grouped into clusters (relative gap [`crate::blend::CLUSTER_GAP`]); per cluster, per
     /// other model, the unused eigenvectors with the largest projection on the cluster's span,
     /// rotated onto it by orthogonal Procrustes, with their Rayleigh quotients.
     fn new(eigs: &[&Eigen], mats: &[&Mat<f64>], closest: usize, rank: usize) -> Self {
@@ -95,21 +95,7 @@ impl Matching {
         let n = r0.vectors.nrows();
         let col = |e: &Eigen, c: usize| -> Vec<f64> { (0..n).map(|r| e.vectors[(r, c)]).collect() };
         let own: Vec<Vec<f64>> = (0..n).map(|c| col(r0, c)).collect();
-        let scale = r0
-            .values
-            .first()
-            .map_or(0.0, |v| v.abs())
-            .max(f64::MIN_POSITIVE);
-        let mut clusters: Vec<(usize, usize)> = Vec::new();
-        let mut j = 0;
-        while j < rank {
-            let mut e = j + 1;
-            while e < rank && (r0.values[e] - r0.values[j]).abs() <= CLUSTER_GAP * scale {
-                e += 1;
-            }
-            clusters.push((j, e));
-            j = e;
-        }
+        let clusters = eigen_clusters(&r0.values, rank);
         let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
         let mut vectors = Vec::with_capacity(eigs.len());
         let mut values = Vec::with_capacity(eigs.len());

@@ -7,7 +7,7 @@ use glam::DVec3;
 use impulse_geom::{Pose, Twist};
 
 use super::*;
-use crate::blend::{BlendedModel, Eigen, blend_poses, blend_rank1, scaled_norm};
+use crate::blend::{BlendedModel, Eigen, blend_poses, blend_rank1, elastic_wrench, scaled_norm};
 use crate::construct::{ConstructOptions, ReducedModel};
 use crate::internal::link_twist;
 use crate::linalg::{Tsvd, pinv, pinv_rank};
@@ -217,15 +217,7 @@ fn per_call(set: &BlendedModel, ee: &[Pose]) -> PerCall {
             blend_poses(&p, &alpha)
         })
         .collect();
-    let xi: Vec<f64> = ee
-        .iter()
-        .zip(&reference)
-        .flat_map(|(h, r)| (r.inverse() * *h).log().to_array())
-        .collect();
-    let n = xi.len();
-    let w: Vec<f64> = (0..n)
-        .map(|r| (0..n).map(|c| stiffness[(r, c)] * xi[c]).sum())
-        .collect();
+    let w = elastic_wrench(ee, &reference, &stiffness);
     let links = (0..models[0].internal.len())
         .map(|l| {
             let refs: Vec<Pose> = models.iter().map(|x| x.internal_reference[l]).collect();

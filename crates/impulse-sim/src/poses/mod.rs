@@ -36,12 +36,14 @@
 
 mod part;
 mod study;
+mod summary;
 
 pub use part::{PartFileDesc, PosePart};
 pub use study::{
-    DropOutcome, DropSettings, PoseRow, PoseSummary, Shard, StudyFile, THESIS_PILOT, drop_scene,
-    merge, run_drops, run_thesis_feedback, summarize,
+    DropOutcome, DropSettings, Shard, StudyFile, THESIS_PILOT, drop_scene, merge, run_drops,
+    run_thesis_feedback,
 };
+pub use summary::{PoseRow, PoseSummary, summarize};
 
 /// The world is polled this many times per simulated second while waiting for the part to
 /// sleep (the frame rate of a drop's scene, [`drop_scene`]). Default `20`: the switching model

@@ -62,7 +62,7 @@ pub struct PosePart {
     /// The part's own frame (the frame its shape was given in) in its body frame (centre of
     /// mass at the origin).
     pub frame: Pose,
-    /// The part's diameter (largest extent of its hull's bounding box diagonal).
+    /// The part's diameter: its hull's bounding-box diagonal.
     pub diameter: f64,
 }
 
@@ -161,14 +161,7 @@ impl PosePart {
             ConvexPolyhedron::hull(&points).map_err(|e| geometry(format!("convex hull: {e}")))?;
         let analysis =
             PoseAnalysis::new(&hull, DVec3::ZERO).map_err(|e| geometry(e.to_string()))?;
-        let diameter = {
-            let v = hull.vertices();
-            let lo = v.iter().fold(DVec3::splat(f64::INFINITY), |a, &p| a.min(p));
-            let hi = v
-                .iter()
-                .fold(DVec3::splat(f64::NEG_INFINITY), |a, &p| a.max(p));
-            (hi - lo).length()
-        };
+        let diameter = analysis.diameter();
         Ok(Self {
             name,
             body,

@@ -4,7 +4,8 @@ use glam::{DQuat, DVec3};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 
-use super::study::{belt_fed_limit, uniform_rotation};
+use super::study::uniform_rotation;
+use super::summary::belt_fed_limit;
 use super::*;
 use crate::scene::{MassDesc, PointMassDesc, ShapeDesc};
 
