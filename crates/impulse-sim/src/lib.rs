@@ -52,6 +52,7 @@
 #![forbid(unsafe_code)]
 
 pub mod articulated;
+pub mod batch;
 pub mod body;
 mod build;
 mod builder;

@@ -1,26 +1,21 @@
 //! The drops of a pose study (settings, starts, the drop's scene and run, shards) and merging
 //! shard files (see the module documentation of [`crate::poses`]).
 
-use std::str::FromStr;
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use glam::{DQuat, DVec3};
+use rand::RngExt;
 use rand::rngs::Xoshiro256PlusPlus;
-use rand::{RngExt, SeedableRng};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::{EPSILON_REL, FACET_ANGLE, POLL_RATE, PosePart};
 use crate::SimError;
+pub use crate::batch::Shard;
+use crate::batch::{run_shard, stream};
 use crate::scene::{BodyDesc, ContactDesc, MotionDesc, RotationDesc, Scene, SceneDesc, ShapeDesc};
 use crate::world::{Material, World};
 
 /// The belt reaches this many part diameters from the drop point, plus the distance the exit
 /// velocity carries the part in [`DropSettings::max_time`]: far enough that no part leaves it.
 const BELT_REACH_DIAMETERS: f64 = 20.0;
-
-/// SplitMix64's increment (the golden ratio in 64 bits), to mix a seed with a drop index.
-const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
 
 /// Settings of a drop (thesis §7.5's values are the defaults).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -105,58 +100,6 @@ impl DropSettings {
     }
 }
 
-/// One shard of a study: drops `index`, `index + count`, `index + 2·count`, …
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Shard {
-    /// This shard, 0 ≤ index < count.
-    pub index: u64,
-    /// Number of shards, ≥ 1.
-    pub count: u64,
-}
-
-impl Shard {
-    /// The whole study in one shard.
-    pub const ALL: Shard = Shard { index: 0, count: 1 };
-
-    /// Whether drop `i` is this shard's.
-    pub fn owns(&self, i: u64) -> bool {
-        i % self.count == self.index
-    }
-
-    /// How many of a study's `drops` drops are this shard's.
-    pub fn drops_of(&self, drops: u64) -> u64 {
-        if self.index >= drops {
-            0
-        } else {
-            (drops - self.index).div_ceil(self.count)
-        }
-    }
-}
-
-impl FromStr for Shard {
-    type Err = String;
-
-    /// Parses `K/N` with 0 ≤ K < N.
-    fn from_str(s: &str) -> Result<Self, String> {
-        let (k, n) = s
-            .split_once('/')
-            .ok_or_else(|| format!("shard `{s}`: expected K/N, e.g. 0/4"))?;
-        let parse = |x: &str, what: &str| {
-            x.trim()
-                .parse::<u64>()
-                .map_err(|e| format!("shard `{s}`: {what} `{x}`: {e}"))
-        };
-        let (index, count) = (parse(k, "K")?, parse(n, "N")?);
-        if count == 0 || index >= count {
-            return Err(format!(
-                "shard `{s}`: need 0 ≤ K < N (the shards of N are 0/N … {}/N)",
-                count.max(1) - 1
-            ));
-        }
-        Ok(Shard { index, count })
-    }
-}
-
 /// What became of one drop.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DropOutcome {
@@ -205,19 +148,6 @@ impl StudyFile {
             .map(|f| (f, part.analysis.facets()[f as usize].solid_angle))
             .collect()
     }
-}
-
-/// SplitMix64's output function: a well-mixed 64-bit value from `x`.
-fn mix(mut x: u64) -> u64 {
-    x = x.wrapping_add(GOLDEN_GAMMA);
-    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^ (x >> 31)
-}
-
-/// The random stream of drop `index` of a study seeded with `seed`.
-fn stream(seed: u64, index: u64) -> Xoshiro256PlusPlus {
-    Xoshiro256PlusPlus::seed_from_u64(mix(seed) ^ mix(index.wrapping_add(GOLDEN_GAMMA)))
 }
 
 /// A rotation uniform on SO(3) (Shoemake 1992).
@@ -415,42 +345,19 @@ pub fn run_drops(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<DropOutcome>, SimError> {
     settings.validate()?;
-    if threads == 0 {
-        return Err(SimError::Invalid {
-            what: "pose study".into(),
-            field: "threads".into(),
-            problem: "need at least one thread".into(),
-        });
-    }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| SimError::Runtime {
-            time: 0.0,
-            message: format!("thread pool: {e}"),
-        })?;
     // Drop 0's world, built once here to report a scene's errors before the workers start.
     World::from_scene(&Scene {
         desc: scene_of(part, settings, DQuat::IDENTITY, part.name.clone()),
         base_dir: part.base_dir.clone(),
     })?;
     let stable = part.analysis.stable();
-    let done = AtomicU64::new(0);
-    let mine = shard.drops_of(drops);
-    pool.install(|| {
-        (0..mine)
-            .into_par_iter()
-            .map(|j| shard.index + j * shard.count)
-            .map(|i| {
-                let start = start_of(part, settings, &stable, seed, i);
-                let out = drop_once(part, settings, i, start).map_err(|e| SimError::Runtime {
-                    time: 0.0,
-                    message: format!("drop {i}: {e}"),
-                })?;
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-                Ok(out)
-            })
-            .collect()
+    run_shard("drop", drops, shard, threads, progress, |i| {
+        drop_once(
+            part,
+            settings,
+            i,
+            start_of(part, settings, &stable, seed, i),
+        )
     })
 }
 

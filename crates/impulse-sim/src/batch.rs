@@ -1,0 +1,172 @@
+//! Batches of independent runs (the drops of a pose study, the throws of a bowling study):
+//! shards for a batch scheduler, a random stream per run that depends only on (seed, run
+//! index), and running a shard's runs on a thread pool. Whatever the thread count and the
+//! shard split, run i sees the same random numbers, so merged shards equal one run bit for
+//! bit.
+
+use std::str::FromStr;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use rand::SeedableRng;
+use rand::rngs::Xoshiro256PlusPlus;
+use rayon::prelude::*;
+
+use crate::SimError;
+
+/// SplitMix64's increment (the golden ratio in 64 bits), to mix a seed with a run index.
+const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// One shard of a study: runs `index`, `index + count`, `index + 2·count`, …
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, 0 ≤ index < count.
+    pub index: u64,
+    /// Number of shards, ≥ 1.
+    pub count: u64,
+}
+
+impl Shard {
+    /// The whole study in one shard.
+    pub const ALL: Shard = Shard { index: 0, count: 1 };
+
+    /// Whether run `i` is this shard's.
+    pub fn owns(&self, i: u64) -> bool {
+        i % self.count == self.index
+    }
+
+    /// How many of a study's `runs` runs are this shard's.
+    pub fn drops_of(&self, runs: u64) -> u64 {
+        if self.index >= runs {
+            0
+        } else {
+            (runs - self.index).div_ceil(self.count)
+        }
+    }
+}
+
+impl FromStr for Shard {
+    type Err = String;
+
+    /// Parses `K/N` with 0 ≤ K < N.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (k, n) = s
+            .split_once('/')
+            .ok_or_else(|| format!("shard `{s}`: expected K/N, e.g. 0/4"))?;
+        let parse = |x: &str, what: &str| {
+            x.trim()
+                .parse::<u64>()
+                .map_err(|e| format!("shard `{s}`: {what} `{x}`: {e}"))
+        };
+        let (index, count) = (parse(k, "K")?, parse(n, "N")?);
+        if count == 0 || index >= count {
+            return Err(format!(
+                "shard `{s}`: need 0 ≤ K < N (the shards of N are 0/N … {}/N)",
+                count.max(1) - 1
+            ));
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// SplitMix64's output function: a well-mixed 64-bit value from `x`.
+fn mix(mut x: u64) -> u64 {
+    x = x.wrapping_add(GOLDEN_GAMMA);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+/// The random stream of run `index` of a study seeded with `seed`.
+pub(crate) fn stream(seed: u64, index: u64) -> Xoshiro256PlusPlus {
+    Xoshiro256PlusPlus::seed_from_u64(mix(seed) ^ mix(index.wrapping_add(GOLDEN_GAMMA)))
+}
+
+/// Runs `run(i)` for the runs `i` of `shard` of a study of `runs` runs on a pool of
+/// `threads` worker threads, calling `progress` with the number done after each. Returns
+/// the results in index order; an error names the run (`what` and its index).
+///
+/// # Errors
+/// [`SimError::Invalid`] for zero threads; the first failing run's error.
+pub(crate) fn run_shard<T: Send>(
+    what: &str,
+    runs: u64,
+    shard: Shard,
+    threads: usize,
+    progress: &(dyn Fn(u64) + Sync),
+    run: impl Fn(u64) -> Result<T, SimError> + Sync,
+) -> Result<Vec<T>, SimError> {
+    if threads == 0 {
+        return Err(SimError::Invalid {
+            what: format!("{what} study"),
+            field: "threads".into(),
+            problem: "need at least one thread".into(),
+        });
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| SimError::Runtime {
+            time: 0.0,
+            message: format!("thread pool: {e}"),
+        })?;
+    let done = AtomicU64::new(0);
+    pool.install(|| {
+        (0..shard.drops_of(runs))
+            .into_par_iter()
+            .map(|j| shard.index + j * shard.count)
+            .map(|i| {
+                let out = run(i).map_err(|e| SimError::Runtime {
+                    time: 0.0,
+                    message: format!("{what} {i}: {e}"),
+                })?;
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                Ok(out)
+            })
+            .collect()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_partition_the_runs() {
+        // Brute force: every run of a study is in exactly one shard, and the counts agree.
+        for runs in [0u64, 1, 7, 20] {
+            for count in 1..6u64 {
+                let mut seen = vec![0; runs as usize];
+                for index in 0..count {
+                    let s = Shard { index, count };
+                    let mine: Vec<u64> = (0..runs).filter(|&i| s.owns(i)).collect();
+                    assert_eq!(mine.len() as u64, s.drops_of(runs));
+                    for i in mine {
+                        seen[i as usize] += 1;
+                    }
+                }
+                assert!(seen.iter().all(|&c| c == 1), "{runs} runs, {count} shards");
+            }
+        }
+    }
+
+    #[test]
+    fn results_do_not_depend_on_threads_or_shards() {
+        use rand::RngExt;
+        let one = |i: u64| Ok(stream(7, i).random::<u64>());
+        let all = run_shard("run", 9, Shard::ALL, 1, &|_| {}, one).unwrap();
+        let two = run_shard("run", 9, Shard::ALL, 2, &|_| {}, one).unwrap();
+        assert_eq!(all, two);
+        let mut merged: Vec<(u64, u64)> = (0..3)
+            .flat_map(|index| {
+                let s = Shard { index, count: 3 };
+                let r = run_shard("run", 9, s, 2, &|_| {}, one).unwrap();
+                (0..9).filter(move |&i| s.owns(i)).zip(r)
+            })
+            .collect();
+        merged.sort();
+        assert_eq!(merged.into_iter().map(|(_, v)| v).collect::<Vec<_>>(), all);
+        // Distinct runs get distinct streams.
+        assert_ne!(all[0], all[1]);
+        assert!(run_shard("run", 9, Shard::ALL, 0, &|_| {}, one).is_err());
+    }
+}
