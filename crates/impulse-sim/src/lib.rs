@@ -54,6 +54,7 @@
 pub mod articulated;
 pub mod batch;
 pub mod body;
+pub mod bowling;
 mod build;
 mod builder;
 pub mod contact;
