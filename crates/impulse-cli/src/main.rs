@@ -17,6 +17,7 @@
 //!   a FORK⁻¹S reduced model under a load (static, or simulated).
 #![forbid(unsafe_code)]
 
+mod bowling;
 mod dynamics;
 mod poses;
 mod reduce;
@@ -75,6 +76,10 @@ enum Command {
     /// §7.5): quasi-static, perturbed quasi-static and dynamic estimates side by side, from
     /// drops run in parallel or in shards (`--shard K/N`, then `impulse poses merge`).
     Poses(poses::PosesArgs),
+    /// The bowling study (thesis §7.4, Fig. 7.10): straight and hooking throws into ten
+    /// pins, mean pins felled against where the ball crosses the pin line, run in parallel
+    /// or in shards (`--shard K/N`, then `impulse bowling merge`); CSV and SVG out.
+    Bowling(bowling::BowlingArgs),
     /// Exact mass properties of a closed polygon mesh (Wavefront OBJ), printed as JSON.
     ///
     /// The mesh must be closed and consistently oriented with faces counter-clockwise seen
@@ -197,6 +202,7 @@ fn main() -> ExitCode {
         Command::Dynamics(args) => dynamics::run(args),
         Command::Reduce(args) => reduce::run(args),
         Command::Poses(args) => poses::run(args),
+        Command::Bowling(args) => bowling::run(args),
     };
     match result {
         Ok(text) => {

@@ -251,7 +251,7 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
 }
 
 /// A line plot: series of (x, y) points with a title and axis names.
-fn line_plot(
+pub(crate) fn line_plot(
     title: &str,
     x_name: &str,
     y_name: &str,
