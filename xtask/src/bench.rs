@@ -11,7 +11,8 @@
 //! (error against slowdown, log–log) per scene into the output directory (default
 //! `target/bench`). Then it runs the stack study ([`crate::stacks`], also alone with
 //! `--case stacks`) and writes `stacks.csv`, and the pose studies ([`crate::poses`], also
-//! alone with `--case poses`), which write `poses.csv`. With `--peers` it runs [`crate::peers`] instead
+//! alone with `--case poses`), which write `poses.csv`, and the bowling study
+//! ([`crate::bowling`], alone with `--case bowling`: `bowling.csv`, `bowling.json`). With `--peers` it runs [`crate::peers`] instead
 //! (re-running itself with the `peers` feature, which builds the peer engine).
 
 use std::fmt::Write as _;
@@ -139,6 +140,9 @@ pub fn run_bench(options: &Options) -> Result<()> {
     if options.case.as_deref() == Some(crate::poses::CASE) {
         return crate::poses::run(&out);
     }
+    if options.case.as_deref() == Some(crate::bowling::CASE) {
+        return crate::bowling::run(&out);
+    }
     let stacks_only = options.case.as_deref() == Some(STACKS_CASE);
     let checks: Vec<SceneCheck> = scene_checks()
         .into_iter()
@@ -205,6 +209,7 @@ pub fn run_bench(options: &Options) -> Result<()> {
     }
     if options.case.is_none() {
         crate::poses::run(&out)?;
+        crate::bowling::run(&out)?;
     }
     Ok(())
 }

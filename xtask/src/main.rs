@@ -22,6 +22,7 @@ mod ci;
 mod forks;
 mod layering;
 // Without the `peers` feature the runner is built (so CI checks it) but has no engine to call.
+mod bowling;
 #[cfg_attr(not(feature = "peers"), allow(dead_code))]
 mod peers;
 mod poses;
@@ -53,6 +54,9 @@ commands:
                                       runs the FORK⁻¹S study alone (Tables 1-2, Fig. 7);
                                       --case poses the pose studies alone (drops/s on 1
                                       and 2 threads, thick coin, thesis parts; poses.csv);
+                                      --case bowling the bowling study alone (throws/s on
+                                      1 and 2 threads, 320 + 320 throws, about 35 min on
+                                      2 cores; bowling.csv, bowling.json);
                                       --peers runs stacks, dominos, ramp, sliding→rolling and
                                       pool break in impulse and rapier3d-f64 side by side
                                       (builds xtask with --features peers; peers.csv, peers.svg)
