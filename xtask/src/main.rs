@@ -17,12 +17,12 @@
 //! command line is parsed by hand.
 
 mod bench;
+mod bowling;
 mod cases;
 mod ci;
 mod forks;
 mod layering;
 // Without the `peers` feature the runner is built (so CI checks it) but has no engine to call.
-mod bowling;
 #[cfg_attr(not(feature = "peers"), allow(dead_code))]
 mod peers;
 mod poses;

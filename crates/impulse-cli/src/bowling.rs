@@ -123,8 +123,12 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
         settle_time: args.settle,
     };
     settings.validate().map_err(|e| e.to_string())?;
-    if args.throws == 0 && args.from.is_none() {
-        return Err("--throws 0: a study needs at least one throw of each kind".into());
+    if args.from.is_none() && !(1..=bowling::MAX_THROWS_PER_KIND).contains(&args.throws) {
+        return Err(format!(
+            "--throws {}: a study needs at least one throw of each kind, and at most {}",
+            args.throws,
+            bowling::MAX_THROWS_PER_KIND
+        ));
     }
     if let Some(n) = args.scene {
         let desc = bowling::throw_scene(&alley, &settings, args.seed, args.throws, n)
@@ -146,7 +150,7 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
             let threads = args
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            let mine = shard.drops_of(2 * args.throws);
+            let mine = shard.runs_of(2 * args.throws);
             let tty = std::io::stderr().is_terminal();
             let progress = |done: u64| {
                 if tty {
@@ -197,7 +201,7 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
         let plot = line_plot(
             "Pins felled against the pin-line crossing (thesis Fig. 7.10)",
             "ball's x where it crosses the pin line (cm; 0 = head pin, + = right)",
-            "mean pins felled (5 mm bins; thick: 2.5 cm running mean)",
+            "mean pins felled (per 5 mm bin, and running mean over 2.5 cm)",
             &[
                 ("straight, 5 mm".into(), straight.clone()),
                 ("hook, 5 mm".into(), hook.clone()),
@@ -221,6 +225,15 @@ fn smooth(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
             (points[k].0, m.mean)
         })
         .collect()
+}
+
+/// A difference in standard errors, or `–` when it is unknown.
+fn z(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.1}")
+    } else {
+        "–".into()
+    }
 }
 
 /// The printed summary of a study.
@@ -275,12 +288,12 @@ fn report(file: &BowlingFile, shard: Shard, wall: Option<f64>) -> String {
     );
     let _ = writeln!(
         t,
-        "pocket {:+.0} … {:+.0} cm                          {}   {}   hook − straight: {:.1} standard errors",
+        "pocket {:+.0} … {:+.0} cm                          {}   {}   hook − straight: {} standard errors",
         100.0 * POCKET.0,
         100.0 * POCKET.1,
         m(&sum.pocket_straight),
         m(&sum.pocket_hook),
-        sum.pocket_hook.z_over(&sum.pocket_straight)
+        z(sum.pocket_hook.z_over(&sum.pocket_straight))
     );
     let _ = writeln!(
         t,
@@ -291,17 +304,17 @@ fn report(file: &BowlingFile, shard: Shard, wall: Option<f64>) -> String {
     );
     let _ = writeln!(
         t,
-        "its shoulders, {:.0} ≤ |x| < {:.0} cm               {}   {}   dip (shoulders − head on): {:.1} and {:.1} standard errors",
+        "its shoulders, {:.0} ≤ |x| < {:.0} cm               {}   {}   dip (shoulders − head on): {} and {} standard errors",
         100.0 * SHOULDERS.0,
         100.0 * SHOULDERS.1,
         m(&sum.shoulders_straight),
         m(&sum.shoulders_hook),
-        sum.shoulders_straight.z_over(&sum.head_on_straight),
-        sum.shoulders_hook.z_over(&sum.head_on_hook)
+        z(sum.shoulders_straight.z_over(&sum.head_on_straight)),
+        z(sum.shoulders_hook.z_over(&sum.head_on_hook))
     );
     let _ = write!(
         t,
-        "\nnot in the means: {} throws crossed outside the window (gutter balls), {} never crossed the pin line; {} throws ended at the settle time with something still moving (counted as the pins stood)",
+        "\nnot in the means: {} throws crossed outside the window (gutter balls), {} never crossed the pin line\nin the means as the pins stood: {} throws ended at the settle time with something still moving",
         sum.outside, sum.no_crossing, sum.unsettled
     );
     t
@@ -310,8 +323,11 @@ fn report(file: &BowlingFile, shard: Shard, wall: Option<f64>) -> String {
 fn read_file(path: &Path) -> Result<BowlingFile, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    serde_json::from_str(&text)
-        .map_err(|e| format!("{}: not a bowling study file: {e}", path.display()))
+    let file: BowlingFile = serde_json::from_str(&text)
+        .map_err(|e| format!("{}: not a bowling study file: {e}", path.display()))?;
+    file.check()
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(file)
 }
 
 fn write_file(path: &Path, file: &BowlingFile) -> Result<(), String> {

@@ -151,7 +151,7 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
             let threads = args
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            let mine = shard.drops_of(args.drops);
+            let mine = shard.runs_of(args.drops);
             let tty = std::io::stderr().is_terminal();
             let progress = |done: u64| {
                 if tty && (done == mine || done % 10 == 0) {
@@ -199,11 +199,14 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
     let a = &part.analysis;
     let _ = writeln!(
         t,
-        "part:             {} ({} hull facets, {} stable, in {} poses told apart by shape)",
+        "part:             {} ({} hull facets, {} stable, in {} told apart by shape)",
         part.name,
         a.facets().len(),
         a.stable().len(),
-        a.classes().len()
+        match a.classes().len() {
+            1 => "1 pose".to_string(),
+            n => format!("{n} poses"),
+        }
     );
     let _ = writeln!(
         t,

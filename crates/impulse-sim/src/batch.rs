@@ -35,7 +35,7 @@ impl Shard {
     }
 
     /// How many of a study's `runs` runs are this shard's.
-    pub fn drops_of(&self, runs: u64) -> u64 {
+    pub fn runs_of(&self, runs: u64) -> u64 {
         if self.index >= runs {
             0
         } else {
@@ -97,7 +97,7 @@ pub(crate) fn run_shard<T: Send>(
 ) -> Result<Vec<T>, SimError> {
     if threads == 0 {
         return Err(SimError::Invalid {
-            what: format!("{what} study"),
+            what: "study".into(),
             field: "threads".into(),
             problem: "need at least one thread".into(),
         });
@@ -111,7 +111,7 @@ pub(crate) fn run_shard<T: Send>(
         })?;
     let done = AtomicU64::new(0);
     pool.install(|| {
-        (0..shard.drops_of(runs))
+        (0..shard.runs_of(runs))
             .into_par_iter()
             .map(|j| shard.index + j * shard.count)
             .map(|i| {
@@ -124,6 +124,31 @@ pub(crate) fn run_shard<T: Send>(
             })
             .collect()
     })
+}
+
+/// The outcomes of the shard files of one study of `runs` runs, in index order: refused
+/// (a message naming the run) when one is beyond the study or in two files.
+///
+/// # Errors
+/// The message, for the caller's error type.
+pub(crate) fn merge_outcomes<T>(
+    what: &str,
+    runs: u64,
+    files: impl IntoIterator<Item = Vec<T>>,
+    index: impl Fn(&T) -> u64,
+) -> Result<Vec<T>, String> {
+    let mut all: Vec<T> = files.into_iter().flatten().collect();
+    if let Some(o) = all.iter().find(|o| index(o) >= runs) {
+        return Err(format!(
+            "{what} {} is beyond the study's {runs} {what}s",
+            index(o)
+        ));
+    }
+    all.sort_by_key(&index);
+    if let Some(w) = all.windows(2).find(|w| index(&w[0]) == index(&w[1])) {
+        return Err(format!("{what} {} is in two files", index(&w[0])));
+    }
+    Ok(all)
 }
 
 #[cfg(test)]
@@ -139,7 +164,7 @@ mod tests {
                 for index in 0..count {
                     let s = Shard { index, count };
                     let mine: Vec<u64> = (0..runs).filter(|&i| s.owns(i)).collect();
-                    assert_eq!(mine.len() as u64, s.drops_of(runs));
+                    assert_eq!(mine.len() as u64, s.runs_of(runs));
                     for i in mine {
                         seen[i as usize] += 1;
                     }

@@ -15,8 +15,7 @@ use crate::world::Material;
 /// Inches to metres.
 const INCH: f64 = 0.0254;
 
-/// Depth of the pit floor below the lane surface (m): deep enough that a pin in the pit
-/// can no longer touch the deck. Default `0.3`.
+/// Depth of the pit floor below the lane surface (m). Default `0.3`.
 pub const PIT_DEPTH: f64 = 0.3;
 
 /// Length of the pit floor beyond the deck, to its back wall (m). Default `1.5`.
@@ -233,6 +232,15 @@ impl AlleyDesc {
         positive("deck_beyond_head_pin", self.deck_beyond_head_pin)?;
         positive("gutter_width", self.gutter_width)?;
         positive("gutter_depth", self.gutter_depth)?;
+        if self.gutter_depth > self.gutter_width / 2.0 {
+            return Err(bad(
+                "gutter_depth",
+                format!(
+                    "{} is more than half the gutter's width {}: a circular gutter is at most a half circle",
+                    self.gutter_depth, self.gutter_width
+                ),
+            ));
+        }
         positive("collision_epsilon", self.collision_epsilon)?;
         positive("pin.mass", self.pin.mass)?;
         positive("pin.spacing", self.pin.spacing)?;
@@ -348,13 +356,14 @@ impl AlleyDesc {
         self.head_pin_distance + self.deck_beyond_head_pin
     }
 
-    /// Where pin `number` (1…10) stands: its base centre on the deck (x, y).
-    pub fn pin_spot(&self, number: usize) -> [f64; 2] {
-        let (row, across) = RACK[(number - 1) % PIN_COUNT];
-        [
+    /// Where pin `number` (1…10) stands: its base centre on the deck (x, y); `None` for
+    /// another number.
+    pub fn pin_spot(&self, number: usize) -> Option<[f64; 2]> {
+        let &(row, across) = RACK.get(number.checked_sub(1)?)?;
+        Some([
             across * self.pin.spacing,
             self.pin_line() + row * self.row_spacing(),
-        ]
+        ])
     }
 
     /// A pin's height (m): the profile's last height.
@@ -502,7 +511,9 @@ impl AlleyDesc {
         }
         let pin = self.pin_shape();
         for number in 1..=PIN_COUNT {
-            let [x, y] = self.pin_spot(number);
+            let Some([x, y]) = self.pin_spot(number) else {
+                continue;
+            };
             d = d.with_body(
                 BodyDesc::new(format!("pin{number}"), pin.clone())
                     .at([x, y, gap])

@@ -3,25 +3,28 @@
 //! in parallel and shardable like [`crate::poses`].
 //!
 //! **The alley** ([`AlleyDesc`], a RON file): a fixed lane from the foul line (y = 0)
-//! past the head pin (the pin line) to the pit, flat-bottomed gutters either side, a pit
+//! past the head pin (the pin line) to the pit, gutters of circular cross-section with outer
+//! walls either side, a pit
 //! floor below the deck's end, optional kickbacks, ten pins (solids of revolution from a
 //! lathe profile, as a compound of convex frusta) standing on their spots, and the ball.
 //!
 //! **A throw** releases the ball on the foul line, resting on the lane, with the speed and
 //! spin of its kind ([`ThrowKind`]): straight (no spin, along +y) or a right-hander's hook
-//! (−12 rad/s about +y, 2° to the right of +y; thesis). The ball slides, then rolls
-//! ([`ideal_crossing`] is the ideal model of that path), then meets the pins. The world is
-//! polled [`POLL_RATE`] times a second; the ball's crossing of the pin line is interpolated
-//! between polls, and the run ends once every pin is at rest or off the deck and the ball
-//! has left the deck (or [`ThrowSettings::settle_time`] after the crossing). A pin stands if
-//! its axis is within [`STANDING_TILT`] of vertical and its base is on the deck.
+//! (−12 rad/s about +y, 2° to the right of +y; thesis). The ball slides, curving while it
+//! slides, then rolls straight ([`ideal_crossing`] is the ideal model of that path), then
+//! meets the pins. The world is polled [`POLL_RATE`] times a second; the ball's crossing of
+//! the pin line is interpolated between polls, and the run ends once every pin is at rest or
+//! off the deck and the ball is asleep or has left the deck (or
+//! [`ThrowSettings::settle_time`] after the crossing). A pin stands ([`pin_stands`]) if its
+//! axis is within [`STANDING_TILT`] of vertical and its base is on the deck.
 //!
 //! **The study**: throws 0, 2, 4, … are straight, 1, 3, 5, … hooks. Each kind's throws are
 //! aimed across the window of crossings ([`ThrowSettings::window_width`], 40 cm in the
 //! thesis) in equal strata, one throw at a random point of each, the release x set from the
 //! ideal model so that the throw would cross at its aim; the measured crossing is what is
-//! binned. Throw i's aim depends only on (seed, i): any thread count and shard split give
-//! the same outcomes, and [`merge`] rebuilds the unsharded file.
+//! binned. Throw i's aim depends only on the study (alley, settings, seed, size) and i: any
+//! thread count and shard split give the same outcomes, and [`merge`] rebuilds the
+//! unsharded file.
 
 mod alley;
 mod summary;
@@ -33,12 +36,12 @@ pub use alley::{
     PinDesc, SLAB,
 };
 pub use summary::{
-    BIN_WIDTH, BinRow, BowlingSummary, HEAD_ON, Mean, POCKET, SHOULDERS, band, bins, summarize,
-    to_csv,
+    BIN_WIDTH, BinRow, BowlingSummary, HEAD_ON, MAX_BINS, Mean, POCKET, SHOULDERS, band, bins,
+    summarize, to_csv,
 };
 pub use throw::{
-    BowlingFile, ThrowKind, ThrowOutcome, ThrowSettings, ideal_crossing, merge, run_throw,
-    run_throws, throw_scene,
+    BowlingFile, MAX_THROWS_PER_KIND, ThrowKind, ThrowOutcome, ThrowSettings, ideal_crossing,
+    merge, pin_stands, run_throw, run_throws, throw_scene,
 };
 
 /// Polls of a throw's world per simulated second (its scene's frame rate). Default `100`:

@@ -8,6 +8,10 @@ use super::throw::{ThrowKind, ThrowOutcome};
 /// Width of a bin of pin-line crossings (m): thesis Fig. 7.10 averages over 5 mm.
 pub const BIN_WIDTH: f64 = 0.005;
 
+/// A window this small a fraction of a bin past a whole number of bins gets no extra bin
+/// (the window's width / bin width is rounded, not exact, in binary).
+const BIN_ROUNDING: f64 = 1e-9;
+
 /// The pocket of a right-hander (m of crossing): between the head pin and the 3 pin, where
 /// the thesis found the hook clearly better, "+6 to +12 cm".
 pub const POCKET: (f64, f64) = (0.06, 0.12);
@@ -58,9 +62,15 @@ impl Mean {
     }
 
     /// `self.mean − other.mean` in units of the standard error of the difference (Welch):
-    /// above 2, a difference larger than two standard errors.
+    /// above 2, a difference larger than two standard errors. NaN when that error is zero
+    /// or unknown (fewer than 2 throws on a side, or no spread at all).
     pub fn z_over(&self, other: &Mean) -> f64 {
-        (self.mean - other.mean) / (self.se.powi(2) + other.se.powi(2)).sqrt()
+        let se = (self.se.powi(2) + other.se.powi(2)).sqrt();
+        if se.is_finite() && se > 0.0 {
+            (self.mean - other.mean) / se
+        } else {
+            f64::NAN
+        }
     }
 }
 
@@ -92,12 +102,20 @@ pub fn band(outcomes: &[ThrowOutcome], kind: ThrowKind, lo: f64, hi: f64, mirror
     )
 }
 
-/// Bins of `width` over `[lo, hi)` with each kind's mean.
+/// Most bins [`bins`] makes: a window of more is refused as empty.
+pub const MAX_BINS: f64 = 1e6;
+
+/// Bins of `width` over `[lo, hi)` with each kind's mean (the last bin ends at `hi`); none
+/// for an empty or non-finite window, or one of more than [`MAX_BINS`] bins.
 pub fn bins(outcomes: &[ThrowOutcome], lo: f64, hi: f64, width: f64) -> Vec<BinRow> {
-    let n = ((hi - lo) / width).round().max(0.0) as usize;
+    let count = ((hi - lo) / width - BIN_ROUNDING).ceil();
+    if !(count.is_finite() && (1.0..=MAX_BINS).contains(&count)) {
+        return Vec::new();
+    }
+    let n = count as usize;
     (0..n)
         .map(|k| {
-            let (a, b) = (lo + k as f64 * width, lo + (k + 1) as f64 * width);
+            let (a, b) = (lo + k as f64 * width, (lo + (k + 1) as f64 * width).min(hi));
             BinRow {
                 lo: a,
                 hi: b,
@@ -155,7 +173,8 @@ pub struct BowlingSummary {
     pub outside: u64,
     /// Throws whose ball never crossed the pin line.
     pub no_crossing: u64,
-    /// Throws stopped at the settle time with something still moving on the deck.
+    /// Throws that crossed but were stopped at the settle time with something still moving
+    /// on the deck (in the means, counted as the pins stood).
     pub unsettled: u64,
 }
 
@@ -182,6 +201,9 @@ pub fn summarize(outcomes: &[ThrowOutcome], window: (f64, f64)) -> BowlingSummar
             })
             .count() as u64,
         no_crossing: outcomes.iter().filter(|o| o.crossing.is_none()).count() as u64,
-        unsettled: outcomes.iter().filter(|o| !o.settled).count() as u64,
+        unsettled: outcomes
+            .iter()
+            .filter(|o| o.crossing.is_some() && !o.settled)
+            .count() as u64,
     }
 }

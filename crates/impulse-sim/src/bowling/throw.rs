@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::alley::{AlleyDesc, PIN_COUNT};
 use super::{POLL_RATE, STANDING_LIFT, STANDING_TILT};
 use crate::SimError;
-use crate::batch::{Shard, run_shard, stream};
+use crate::batch::{Shard, merge_outcomes, run_shard, stream};
 use crate::scene::{Scene, SceneDesc};
 use crate::world::World;
 
@@ -235,6 +235,18 @@ pub struct BowlingFile {
     pub outcomes: Vec<ThrowOutcome>,
 }
 
+impl BowlingFile {
+    /// Checks a file read back: its alley, settings and study size.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the field.
+    pub fn check(&self) -> Result<(), SimError> {
+        self.alley.validate()?;
+        self.settings.validate()?;
+        check_throws(self.throws_per_kind)
+    }
+}
+
 /// A study's plan: the alley and settings, checked, with each kind's aim offset.
 struct Plan<'a> {
     alley: &'a AlleyDesc,
@@ -255,13 +267,7 @@ impl<'a> Plan<'a> {
     ) -> Result<Self, SimError> {
         alley.validate()?;
         settings.validate()?;
-        if per_kind == 0 {
-            return Err(SimError::Invalid {
-                what: "bowling study".into(),
-                field: "throws".into(),
-                problem: "need at least one throw of each kind".into(),
-            });
-        }
+        check_throws(per_kind)?;
         let gravity = DVec3::from_array(alley.scene(0.0).gravity).length();
         let ideal = |kind| {
             let (v, w) = settings.launch(kind);
@@ -275,18 +281,36 @@ impl<'a> Plan<'a> {
             )
             .ok_or_else(|| SimError::Invalid {
                 what: "throw settings".into(),
-                field: format!("{kind:?}"),
-                problem: "the ball would not reach the pin line".into(),
+                field: "speed".into(),
+                problem: format!(
+                    "a {kind:?} throw would not reach the pin line (too slow for the ball–lane friction)"
+                ),
             })
         };
-        Ok(Self {
+        let plan = Self {
             straight: ideal(ThrowKind::Straight)?,
             hook: ideal(ThrowKind::Hook)?,
             alley,
             settings,
             seed,
             per_kind,
-        })
+        };
+        // Every release point must be over the lane or a gutter, clear of the gutter walls.
+        let reach = alley.lane_width / 2.0 + alley.gutter_width - alley.ball.radius;
+        let (lo, hi) = settings.window();
+        for (kind, (offset, _)) in [("straight", plan.straight), ("hook", plan.hook)] {
+            let far = (lo - offset).abs().max((hi - offset).abs());
+            if far > reach {
+                return Err(SimError::Invalid {
+                    what: "throw settings".into(),
+                    field: "window_center/window_width".into(),
+                    problem: format!(
+                        "{kind} throws aimed at crossings {lo:+.3} … {hi:+.3} m would be released up to {far:.3} m from the lane's middle, beyond the gutters ({reach:.3} m)"
+                    ),
+                });
+            }
+        }
+        Ok(plan)
     }
 
     /// Throw `index`'s kind, aim and release x: the throws of a kind are aimed across the
@@ -412,17 +436,37 @@ impl<'a> Plan<'a> {
         })
     }
 
-    /// Whether a pin whose own frame (base centre, axis z) is at `frame` stands: upright
-    /// within [`STANDING_TILT`], its base on the deck within [`STANDING_LIFT`].
     fn is_standing(&self, frame: Pose) -> bool {
-        let axis = frame.rotation * DVec3::Z;
-        let base = frame.translation;
-        let a = self.alley;
-        axis.z >= STANDING_TILT.cos()
-            && base.z.abs() <= STANDING_LIFT
-            && base.x.abs() <= a.lane_width / 2.0
-            && base.y <= a.deck_end()
+        pin_stands(self.alley, frame)
     }
+}
+
+/// Whether a pin whose own frame (base centre, axis z) is at `frame` stands: upright within
+/// [`STANDING_TILT`], its base on the deck (within [`STANDING_LIFT`] of its surface).
+pub fn pin_stands(alley: &AlleyDesc, frame: Pose) -> bool {
+    let axis = frame.rotation * DVec3::Z;
+    let base = frame.translation;
+    axis.z >= STANDING_TILT.cos()
+        && base.z.abs() <= STANDING_LIFT
+        && base.x.abs() <= alley.lane_width / 2.0
+        && base.y <= alley.deck_end()
+}
+
+/// Most throws of each kind a study may have (2⁴⁰, beyond any run): keeps 2 × throws and
+/// the stratum arithmetic exact.
+pub const MAX_THROWS_PER_KIND: u64 = 1 << 40;
+
+fn check_throws(per_kind: u64) -> Result<(), SimError> {
+    if per_kind == 0 || per_kind > MAX_THROWS_PER_KIND {
+        return Err(SimError::Invalid {
+            what: "bowling study".into(),
+            field: "throws".into(),
+            problem: format!(
+                "{per_kind}: need at least one throw of each kind and at most {MAX_THROWS_PER_KIND}"
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The scene of throw `index` of a study: `impulse run` on it replays that throw.
@@ -530,25 +574,14 @@ pub fn merge(files: &[BowlingFile]) -> Result<BowlingFile, SimError> {
             )));
         }
     }
-    let total = 2 * first.throws_per_kind;
-    if let Some(o) = files
-        .iter()
-        .flat_map(|f| &f.outcomes)
-        .find(|o| o.index >= total)
-    {
-        return Err(bad(format!(
-            "throw {} is beyond the study's {total} throws",
-            o.index
-        )));
-    }
-    let mut outcomes: Vec<ThrowOutcome> = files
-        .iter()
-        .flat_map(|f| f.outcomes.iter().cloned())
-        .collect();
-    outcomes.sort_by_key(|o| o.index);
-    if let Some(w) = outcomes.windows(2).find(|w| w[0].index == w[1].index) {
-        return Err(bad(format!("throw {} is in two files", w[0].index)));
-    }
+    first.check()?;
+    let outcomes = merge_outcomes(
+        "throw",
+        2 * first.throws_per_kind,
+        files.iter().map(|f| f.outcomes.clone()),
+        |o| o.index,
+    )
+    .map_err(bad)?;
     Ok(BowlingFile {
         outcomes,
         ..first.clone()

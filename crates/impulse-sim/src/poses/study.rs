@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::{EPSILON_REL, FACET_ANGLE, POLL_RATE, PosePart};
 use crate::SimError;
 pub use crate::batch::Shard;
-use crate::batch::{run_shard, stream};
+use crate::batch::{merge_outcomes, run_shard, stream};
 use crate::scene::{BodyDesc, ContactDesc, MotionDesc, RotationDesc, Scene, SceneDesc, ShapeDesc};
 use crate::world::{Material, World};
 
@@ -439,24 +439,13 @@ pub fn merge(files: &[StudyFile]) -> Result<StudyFile, SimError> {
             )));
         }
     }
-    if let Some(o) = files
-        .iter()
-        .flat_map(|f| &f.outcomes)
-        .find(|o| o.index >= first.drops)
-    {
-        return Err(bad(format!(
-            "drop {} is beyond the study's {} drops",
-            o.index, first.drops
-        )));
-    }
-    let mut outcomes: Vec<DropOutcome> = files
-        .iter()
-        .flat_map(|f| f.outcomes.iter().copied())
-        .collect();
-    outcomes.sort_by_key(|o| o.index);
-    if let Some(w) = outcomes.windows(2).find(|w| w[0].index == w[1].index) {
-        return Err(bad(format!("drop {} is in two files", w[0].index)));
-    }
+    let outcomes = merge_outcomes(
+        "drop",
+        first.drops,
+        files.iter().map(|f| f.outcomes.clone()),
+        |o| o.index,
+    )
+    .map_err(bad)?;
     Ok(StudyFile {
         outcomes,
         ..first.clone()
