@@ -94,7 +94,7 @@ pub fn run(out: &std::path::Path) -> Result<()> {
         s.shoulders_hook.z_over(&s.head_on_hook)
     );
     println!(
-        "  gutter balls {}, never crossed {}, ended at the settle time {}",
+        "  crossed outside the window (gutter or deflected) {}, never crossed {}, ended at the settle time {}",
         s.outside, s.no_crossing, s.unsettled
     );
     let (lo, hi) = settings.window();

@@ -314,7 +314,7 @@ fn report(file: &BowlingFile, shard: Shard, wall: Option<f64>) -> String {
     );
     let _ = write!(
         t,
-        "\nnot in the means: {} throws crossed outside the window (gutter balls), {} never crossed the pin line\nin the means as the pins stood: {} throws ended at the settle time with something still moving",
+        "\nnot in the means: {} throws crossed outside the window (in a gutter, or deflected by the pins), {} never crossed the pin line\nin the means as the pins stood: {} throws ended at the settle time with something still moving",
         sum.outside, sum.no_crossing, sum.unsettled
     );
     t
