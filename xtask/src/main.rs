@@ -55,7 +55,7 @@ commands:
                                       --case poses the pose studies alone (drops/s on 1
                                       and 2 threads, thick coin, thesis parts; poses.csv);
                                       --case bowling the bowling study alone (throws/s on
-                                      1 and 2 threads, 320 + 320 throws, about 35 min on
+                                      1 and 2 threads, 320 + 320 throws, about 45 min on
                                       2 cores; bowling.csv, bowling.json);
                                       --peers runs stacks, dominos, ramp, sliding→rolling and
                                       pool break in impulse and rapier3d-f64 side by side
