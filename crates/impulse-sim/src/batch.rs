@@ -126,29 +126,68 @@ pub(crate) fn run_shard<T: Send>(
     })
 }
 
-/// The outcomes of the shard files of one study of `runs` runs, in index order: refused
-/// (a message naming the run) when one is beyond the study or in two files.
+/// A study's file as [`merge`] sees it: a header that shard files of one study share, and
+/// outcomes indexed by run.
+pub(crate) trait StudyFile: Clone {
+    /// One run's outcome.
+    type Run: Clone;
+    /// The files, in error messages: `"pose study files"`.
+    const FILES: &'static str;
+    /// One run, in error messages: `"drop"`.
+    const RUN: &'static str;
+    /// What the header holds, in error messages.
+    const HEADER: &'static str;
+    /// Whether `other` is a file of the same study (equal headers).
+    fn same_study(&self, other: &Self) -> bool;
+    /// Checks the header of a file read back.
+    fn check_header(&self) -> Result<(), SimError> {
+        Ok(())
+    }
+    /// Runs of the whole study.
+    fn runs(&self) -> u64;
+    /// This file's outcomes.
+    fn outcomes(&self) -> &[Self::Run];
+    /// A run's index in the study.
+    fn index(run: &Self::Run) -> u64;
+    /// This file's header with `outcomes`.
+    fn with_outcomes(&self, outcomes: Vec<Self::Run>) -> Self;
+}
+
+/// Merges shard files of one study into the file of the whole study, outcomes in index
+/// order.
 ///
 /// # Errors
-/// The message, for the caller's error type.
-pub(crate) fn merge_outcomes<T>(
-    what: &str,
-    runs: u64,
-    files: impl IntoIterator<Item = Vec<T>>,
-    index: impl Fn(&T) -> u64,
-) -> Result<Vec<T>, String> {
-    let mut all: Vec<T> = files.into_iter().flatten().collect();
-    if let Some(o) = all.iter().find(|o| index(o) >= runs) {
-        return Err(format!(
-            "{what} {} is beyond the study's {runs} {what}s",
-            index(o)
-        ));
+/// [`SimError::Invalid`] when there are no files, the files are of different studies, a run
+/// is beyond the study or in two files.
+pub(crate) fn merge<F: StudyFile>(files: &[F]) -> Result<F, SimError> {
+    let bad = |problem: String| SimError::Invalid {
+        what: F::FILES.into(),
+        field: "merge".into(),
+        problem,
+    };
+    let first = files
+        .first()
+        .ok_or_else(|| bad("no files to merge".into()))?;
+    if let Some(k) = files.iter().position(|f| !f.same_study(first)) {
+        return Err(bad(format!(
+            "file {k} is of another study ({} differ from file 0)",
+            F::HEADER
+        )));
     }
-    all.sort_by_key(&index);
-    if let Some(w) = all.windows(2).find(|w| index(&w[0]) == index(&w[1])) {
-        return Err(format!("{what} {} is in two files", index(&w[0])));
+    first.check_header()?;
+    let (runs, run) = (first.runs(), F::RUN);
+    let mut all: Vec<F::Run> = files.iter().flat_map(|f| f.outcomes()).cloned().collect();
+    if let Some(o) = all.iter().find(|o| F::index(o) >= runs) {
+        return Err(bad(format!(
+            "{run} {} is beyond the study's {runs} {run}s",
+            F::index(o)
+        )));
     }
-    Ok(all)
+    all.sort_by_key(F::index);
+    if let Some(w) = all.windows(2).find(|w| F::index(&w[0]) == F::index(&w[1])) {
+        return Err(bad(format!("{run} {} is in two files", F::index(&w[0]))));
+    }
+    Ok(first.with_outcomes(all))
 }
 
 #[cfg(test)]

@@ -220,13 +220,7 @@ impl AlleyDesc {
             field: field.into(),
             problem,
         };
-        let positive = |field: &str, x: f64| {
-            if x.is_finite() && x > 0.0 {
-                Ok(())
-            } else {
-                Err(bad(field, format!("{x} must be finite and > 0")))
-            }
-        };
+        let positive = |field: &str, x: f64| crate::scene::positive(x).map_err(|p| bad(field, p));
         positive("lane_width", self.lane_width)?;
         positive("head_pin_distance", self.head_pin_distance)?;
         positive("deck_beyond_head_pin", self.deck_beyond_head_pin)?;

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::alley::{AlleyDesc, PIN_COUNT};
 use super::{POLL_RATE, STANDING_LIFT, STANDING_TILT};
 use crate::SimError;
-use crate::batch::{Shard, merge_outcomes, run_shard, stream};
+use crate::batch::{Shard, run_shard, stream};
 use crate::scene::{Scene, SceneDesc};
 use crate::world::World;
 
@@ -98,13 +98,7 @@ impl ThrowSettings {
             field: field.into(),
             problem,
         };
-        let positive = |field: &str, x: f64| {
-            if x.is_finite() && x > 0.0 {
-                Ok(())
-            } else {
-                Err(bad(field, format!("{x} must be finite and > 0")))
-            }
-        };
+        let positive = |field: &str, x: f64| crate::scene::positive(x).map_err(|p| bad(field, p));
         positive("speed", self.speed)?;
         positive("window_width", self.window_width)?;
         positive("settle_time", self.settle_time)?;
@@ -552,38 +546,34 @@ pub fn run_throws(
 /// [`SimError::Invalid`] when there are no files, the files are of different studies, or
 /// two files hold the same throw.
 pub fn merge(files: &[BowlingFile]) -> Result<BowlingFile, SimError> {
-    let bad = |problem: String| SimError::Invalid {
-        what: "bowling study files".into(),
-        field: "merge".into(),
-        problem,
-    };
-    let first = files
-        .first()
-        .ok_or_else(|| bad("no files to merge".into()))?;
-    for (k, f) in files.iter().enumerate().skip(1) {
-        if (&f.alley, f.settings, f.seed, f.throws_per_kind)
-            != (
-                &first.alley,
-                first.settings,
-                first.seed,
-                first.throws_per_kind,
-            )
-        {
-            return Err(bad(format!(
-                "file {k} is of another study (alley, settings, seed or throws differ from file 0)"
-            )));
+    crate::batch::merge(files)
+}
+
+impl crate::batch::StudyFile for BowlingFile {
+    type Run = ThrowOutcome;
+    const FILES: &'static str = "bowling study files";
+    const RUN: &'static str = "throw";
+    const HEADER: &'static str = "alley, settings, seed or throws";
+    fn same_study(&self, o: &Self) -> bool {
+        (&self.alley, self.settings, self.seed, self.throws_per_kind)
+            == (&o.alley, o.settings, o.seed, o.throws_per_kind)
+    }
+    fn check_header(&self) -> Result<(), SimError> {
+        self.check()
+    }
+    fn runs(&self) -> u64 {
+        2 * self.throws_per_kind
+    }
+    fn outcomes(&self) -> &[ThrowOutcome] {
+        &self.outcomes
+    }
+    fn index(run: &ThrowOutcome) -> u64 {
+        run.index
+    }
+    fn with_outcomes(&self, outcomes: Vec<ThrowOutcome>) -> Self {
+        Self {
+            outcomes,
+            ..self.clone()
         }
     }
-    first.check()?;
-    let outcomes = merge_outcomes(
-        "throw",
-        2 * first.throws_per_kind,
-        files.iter().map(|f| f.outcomes.clone()),
-        |o| o.index,
-    )
-    .map_err(bad)?;
-    Ok(BowlingFile {
-        outcomes,
-        ..first.clone()
-    })
 }

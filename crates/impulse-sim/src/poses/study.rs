@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::{EPSILON_REL, FACET_ANGLE, POLL_RATE, PosePart};
 use crate::SimError;
 pub use crate::batch::Shard;
-use crate::batch::{merge_outcomes, run_shard, stream};
+use crate::batch::{run_shard, stream};
 use crate::scene::{BodyDesc, ContactDesc, MotionDesc, RotationDesc, Scene, SceneDesc, ShapeDesc};
 use crate::world::{Material, World};
 
@@ -416,38 +416,36 @@ pub fn run_thesis_feedback(
 /// [`SimError::Invalid`] when there are no files, the files are of different parts,
 /// settings, seeds or study sizes, or two files hold the same drop.
 pub fn merge(files: &[StudyFile]) -> Result<StudyFile, SimError> {
-    let bad = |problem: String| SimError::Invalid {
-        what: "pose study files".into(),
-        field: "merge".into(),
-        problem,
-    };
-    let first = files
-        .first()
-        .ok_or_else(|| bad("no files to merge".into()))?;
-    for (k, f) in files.iter().enumerate().skip(1) {
-        if (f.part.as_str(), f.settings, f.seed, f.drops, &f.stable)
-            != (
-                first.part.as_str(),
-                first.settings,
-                first.seed,
-                first.drops,
-                &first.stable,
-            )
-        {
-            return Err(bad(format!(
-                "file {k} is of another study (part, stable facets, settings, seed or drops differ from file 0)"
-            )));
+    crate::batch::merge(files)
+}
+
+impl crate::batch::StudyFile for StudyFile {
+    type Run = DropOutcome;
+    const FILES: &'static str = "pose study files";
+    const RUN: &'static str = "drop";
+    const HEADER: &'static str = "part, stable facets, settings, seed or drops";
+    fn same_study(&self, o: &Self) -> bool {
+        (
+            self.part.as_str(),
+            self.settings,
+            self.seed,
+            self.drops,
+            &self.stable,
+        ) == (o.part.as_str(), o.settings, o.seed, o.drops, &o.stable)
+    }
+    fn runs(&self) -> u64 {
+        self.drops
+    }
+    fn outcomes(&self) -> &[DropOutcome] {
+        &self.outcomes
+    }
+    fn index(run: &DropOutcome) -> u64 {
+        run.index
+    }
+    fn with_outcomes(&self, outcomes: Vec<DropOutcome>) -> Self {
+        Self {
+            outcomes,
+            ..self.clone()
         }
     }
-    let outcomes = merge_outcomes(
-        "drop",
-        first.drops,
-        files.iter().map(|f| f.outcomes.clone()),
-        |o| o.index,
-    )
-    .map_err(bad)?;
-    Ok(StudyFile {
-        outcomes,
-        ..first.clone()
-    })
 }
