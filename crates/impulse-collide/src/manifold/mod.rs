@@ -67,12 +67,14 @@ use crate::depth;
 use crate::feature::{Closest, Feature, FeaturePair};
 use crate::shape::{self, Convex, Shape};
 
+mod clearance;
 mod clip;
 pub mod coherence;
 mod reduce;
 #[cfg(test)]
 mod tests;
 
+pub use clearance::{Outside, convex_outside, shape_outside};
 pub use coherence::match_points;
 
 /// Most points a manifold keeps: four span a face contact's area, and a contact-constrained

@@ -12,6 +12,7 @@ use impulse_geom::{ConvexPolyhedron, Ellipsoid, Sphere, primitives};
 use rand::RngExt;
 
 mod boxes;
+mod outside;
 mod random;
 mod smooth;
 
