@@ -20,7 +20,9 @@
 //!   solve (e = 0 between held contacts), the limit such a train of collisions tends to;
 //!   each pair's first collision keeps its restitution.
 //! - **Island steps**: every `h` ([`SustainedSettings::step`], shorter while a body turns: down
-//!   to [`SustainedSettings::min_step`]) the held pairs' manifolds are
+//!   to [`SustainedSettings::min_step`]; a pair turning faster than its points within ε_c
+//!   allow is held with speculative points beyond ε_c, `world/hold.rs`) the held pairs'
+//!   manifolds are
 //!   computed (`impulse_collide::manifold`), bodies joined by held pairs form islands, and each
 //!   island's contact impulses over the coming step are solved with the exact Coulomb disk
 //!   (`impulse_response::contact`). The impulses are not applied as velocity jumps: each body
@@ -83,9 +85,12 @@ pub struct SustainedSettings {
     /// Island step h (s): the longest step an island takes. Default [`DEFAULT_STEP`].
     pub step: f64,
     /// Shortest island step (s) taken for turning bodies. An island steps at the rate its
-    /// turning needs (a step short enough that rotation cannot bring another feature through
-    /// the rest of the contact envelope, (1 − g_r/ε_c)·ε_c / (‖ω‖·r)); a body turning too fast
-    /// even for this step is handed to the event loop. Default [`DEFAULT_MIN_STEP`].
+    /// turning needs: a step short enough that rotation cannot bring another feature through
+    /// the rest of the contact envelope, (1 − g_r/ε_c)·ε_c / (‖ω‖·r), while that is at least
+    /// this; past it, its pairs reach for points beyond ε_c and the step is bounded by the
+    /// curvature of the turning and the clearance of what the manifold leaves out
+    /// (`world/hold.rs`). A pair needing less than this even then is handed to the event loop.
+    /// Default [`DEFAULT_MIN_STEP`].
     pub min_step: f64,
     /// The switching speed in units of the microcollision speed √(2·g·ε_c) (thesis eq.
     /// 3.18). Default `1.0`.
@@ -117,8 +122,9 @@ pub struct SustainedSettings {
 /// Default island step (s): 1 ms.
 pub const DEFAULT_STEP: f64 = 1e-3;
 
-/// Default shortest island step (s): 50 µs, so a toppling domino (r = 27 mm, ε_c = 20 µm)
-/// stays a constraint up to ‖ω‖ ≈ 13 rad/s.
+/// Default shortest island step (s): 50 µs, so a toppling domino (r = 27 mm, ε_c = 20 µm) is
+/// held by its points within ε_c alone up to ‖ω‖ ≈ 6.6 rad/s, and beyond it by speculative
+/// points.
 pub const DEFAULT_MIN_STEP: f64 = 5e-5;
 
 /// A contact counts as slipping at the start of a step when its tangential speed exceeds this

@@ -372,10 +372,10 @@ impl World {
                     // that body wholly impulse-driven: a body half held would be pressed by a
                     // held load its microcollisions do not know of.
                     if self.switching() && self.is_slow(pair, x, n) {
-                        let limit = HOLD_ROTATION_FRACTION * self.rotation_limit();
+                        let limit = HOLD_ROTATION_FRACTION * self.spin_limit();
                         for i in [pair.0, pair.1] {
                             let b = self.b(i);
-                            let turning = super::island::rotation_speed(b, b) >= limit;
+                            let turning = super::hold::spin_accel(b, b) >= limit;
                             if turning && self.is_held_body(i) {
                                 self.release_all_of(i);
                             }
@@ -532,9 +532,7 @@ impl World {
         if !(ba.is_dynamic() || bb.is_dynamic()) || ba.is_link() || bb.is_link() {
             return false;
         }
-        self.is_slow((a, b), x, n)
-            && super::island::turn_speed(ba, bb, Some(n))
-                < HOLD_ROTATION_FRACTION * self.rotation_limit()
+        self.is_slow((a, b), x, n) && self.can_hold((a, b), false)
     }
 
     /// Whether a pair found approaching within ε_c is held instead of struck again: in the
@@ -554,8 +552,23 @@ impl World {
         let (ba, bb) = (self.b(a), self.b(b));
         (ba.is_dynamic() || bb.is_dynamic())
             && !(ba.is_link() || bb.is_link())
-            && super::island::rotation_speed(ba, bb)
-                < HOLD_ROTATION_FRACTION * self.rotation_limit()
+            && self.can_hold((a, b), true)
+    }
+
+    /// Whether the islands could hold a pair with room to spare: held as
+    /// [`World::pair_contact`] would hold it with every limit (turning, speeds, the shortest
+    /// step) tightened by [`HOLD_ROTATION_FRACTION`], so that a pair just held is not released
+    /// at its first island step.
+    fn can_hold(&self, pair: (u32, u32), struck: bool) -> bool {
+        matches!(
+            self.pair_contact(
+                pair,
+                struck,
+                HOLD_ROTATION_FRACTION,
+                &mut Default::default()
+            ),
+            Ok(super::hold::PairContact::Held { .. })
+        )
     }
 
     /// Whether a contact at `x` along `n` neither approaches nor separates faster than the

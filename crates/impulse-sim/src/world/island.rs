@@ -3,11 +3,12 @@
 //! waking.
 
 use glam::DVec3;
-use impulse_collide::manifold::{self, MAX_POINTS, Manifold, ManifoldCache};
+use impulse_collide::manifold::{self, ContactPoint, MAX_POINTS, Manifold, ManifoldCache};
 use impulse_response::{Contact, ContactFrame, IslandBody, SolverSettings, solve_contacts};
 use rustc_hash::FxHashMap;
 
 use super::World;
+use super::hold::PairContact;
 use super::patch::{patch_plane_fit, patch_ranges, patch_targets};
 use crate::contact::response_body;
 use crate::error::SimError;
@@ -36,10 +37,14 @@ const STRUCK_FRACTION: f64 = 1e-2;
 /// island-step grid ended on it (rounding). Default `1e-6`.
 const GRID_SLACK: f64 = 1e-6;
 
-/// Fraction of the envelope left above the rest gap that turning may use up within one
-/// island step: the rest covers the angular acceleration within the step (the step is chosen
-/// from the speeds at its start). Default `0.5`.
-const TURN_STEP_SAFETY: f64 = 0.5;
+/// Solver tolerance, in units of the microcollision speed, of an island holding a pair that
+/// turns too fast to be held by its points within ε_c alone ([`World::pair_contact`]).
+/// Such an island's step lets the curvature of its motion use up to [`super::hold::TURN_STEP_SAFETY`] of
+/// the envelope; a speed error of `1e-3`·√(2·g·ε_c) over a 1 ms step moves a contact by
+/// about 1e-3 of ε_c (for ε_c = 20 μm), far below that. Default `1e-3`: with the default
+/// `1e-4` the dominos took twice the sweeps (0.32 million against 0.10); with `1e-2` a
+/// solve that stops that early left four caps of the feeder chute jammed in its funnel.
+const FAST_TOLERANCE_FACTOR: f64 = 1e-3;
 
 /// A pair the islands hold: its manifolds of the last step and the impulse each point carried
 /// (the warm start of the next step), in world axes: a contact frame is built from its
@@ -49,6 +54,10 @@ const TURN_STEP_SAFETY: f64 = 0.5;
 #[derive(Clone, Debug, Default)]
 pub(super) struct HeldPair {
     manifolds: Vec<Manifold>,
+    /// Per manifold, the vertex–face points of vertices outside its contact features (a
+    /// fast-turning pair's, [`World::pair_contact`]); they join their manifold's patch, start
+    /// cold and keep no impulse.
+    outside: Vec<Vec<ContactPoint>>,
     impulses: Vec<[DVec3; MAX_POINTS]>,
     cache: ManifoldCache,
     /// Length of the step the impulses were solved for (s), to scale the warm start to the
@@ -112,31 +121,6 @@ impl World {
     /// [`crate::sustained`]).
     pub(super) fn switch_speed(&self) -> f64 {
         self.islands.settings.switch_speed_factor * self.micro_speed()
-    }
-
-    /// What is left of the contact envelope above a held contact's rest gap,
-    /// (1 − g_r/ε_c)·ε_c: rotation must not bring another feature through it within a step.
-    fn envelope_left(&self) -> f64 {
-        (1.0 - self.islands.settings.rest_gap_fraction) * self.collision_epsilon()
-    }
-
-    /// The turning speed ([`turn_speed`]) for which the shortest island step is needed
-    /// ([`TURN_STEP_SAFETY`]): above it the pair is released to the event loop, below half of
-    /// it a pair may be held.
-    pub(super) fn rotation_limit(&self) -> f64 {
-        TURN_STEP_SAFETY * self.envelope_left() / self.islands.settings.min_step
-    }
-
-    /// The island step a pair whose surfaces rotation moves at `speed` needs: short enough
-    /// that no other feature comes through the rest of the envelope, within
-    /// [`SustainedSettings::min_step`] and [`SustainedSettings::step`].
-    fn rotation_step(&self, speed: f64) -> f64 {
-        let s = &self.islands.settings;
-        if speed > 0.0 {
-            (TURN_STEP_SAFETY * self.envelope_left() / speed).clamp(s.min_step, s.step)
-        } else {
-            s.step
-        }
     }
 
     /// A full island step that ends on the world's grid of island steps (the multiples of
@@ -358,8 +342,7 @@ impl World {
         let mut released = Vec::new();
         let mut spinning: Vec<u32> = Vec::new();
         // Awake held pairs and how fast another of their features can approach.
-        let mut turning: Vec<((u32, u32), f64)> = Vec::new();
-        let limit = self.rotation_limit();
+        let mut turning: Vec<((u32, u32), f64, bool)> = Vec::new();
         for &p in &pairs {
             let live = "internal ids name live bodies";
             let ba = self.slots[p.0 as usize].body.as_ref().expect(live);
@@ -368,47 +351,40 @@ impl World {
             if sleeping(ba) && sleeping(bb) {
                 continue;
             }
+            let struck = self.islands.held[&p].struck;
+            let mut cache =
+                std::mem::take(&mut self.islands.held.get_mut(&p).expect("listed above").cache);
+            let contact = self.pair_contact(p, struck, 1.0, &mut cache);
             let held = self.islands.held.get_mut(&p).expect("listed above");
-            let found = manifold::shape_manifolds(
-                &ba.shape,
-                &ba.pose,
-                &bb.shape,
-                &bb.pose,
-                eps,
-                &mut held.cache,
-            );
-            let found = match found {
-                Ok(m) => m,
-                Err(e) => {
-                    let msg = format!("contact manifold of {} / {}: {e}", ba.name, bb.name);
-                    return Err(self.runtime(msg));
+            held.cache = cache;
+            let (live, outside, step, fast) = match contact? {
+                PairContact::Apart => {
+                    released.push(p);
+                    continue;
                 }
-            };
-            let live: Vec<Manifold> = found.into_iter().filter(|m| m.min_gap() <= eps).collect();
-            if live.is_empty() {
-                released.push(p);
-                continue;
-            }
-            // A body turning fast enough to bring another feature through the envelope
-            // even within the shortest step is not in static contact: all its pairs go back
-            // to the event loop, which bounds them (a body half held, half hit by
-            // microcollisions would be pressed by a held load the microcollisions do not
-            // know of).
-            let turn = if held.struck {
-                rotation_speed(ba, bb)
-            } else {
-                turn_speed(ba, bb, Some(live[0].normal))
-            };
-            if turn > limit {
-                for (i, b) in [(p.0, ba), (p.1, bb)] {
-                    if rotation_speed(b, b) > limit {
-                        spinning.push(i);
+                // A body turning so fast that even the shortest step would carry a feature
+                // through the envelope is not in static contact: all its pairs go back to
+                // the event loop, which bounds them (a body half held, half hit by
+                // microcollisions would be pressed by a held load the microcollisions do not
+                // know of).
+                PairContact::TooFast => {
+                    for i in [p.0, p.1] {
+                        if self.b(i).is_dynamic() {
+                            spinning.push(i);
+                        }
                     }
+                    released.push(p);
+                    continue;
                 }
-                released.push(p);
-                continue;
-            }
-            turning.push((p, turn));
+                PairContact::Held {
+                    manifolds,
+                    outside,
+                    step,
+                    fast,
+                } => (manifolds, outside, step, fast),
+            };
+            turning.push((p, step, fast));
+            let held = self.islands.held.get_mut(&p).expect("listed above");
             let mut impulses = vec![[DVec3::ZERO; MAX_POINTS]; live.len()];
             for (k, m) in live.iter().enumerate() {
                 let old = held.manifolds.iter().position(|o| o.pieces == m.pieces);
@@ -422,6 +398,7 @@ impl World {
                 }
             }
             held.manifolds = live;
+            held.outside = outside;
             held.impulses = impulses;
         }
         spinning.sort_unstable();
@@ -460,8 +437,8 @@ impl World {
             }
             let h0 = turning
                 .iter()
-                .filter(|(p, _)| island.pairs.binary_search(p).is_ok())
-                .map(|&(_, turn)| self.rotation_step(turn))
+                .filter(|(p, _, _)| island.pairs.binary_search(p).is_ok())
+                .map(|&(_, step, _)| step)
                 .fold(settings.step, f64::min);
             // A full step ends on the island-step grid, unless the island's last step was
             // cut by a transition (it is in the middle of one: realigning would cost a step
@@ -488,7 +465,10 @@ impl World {
                     }
                 }
             }
-            let h = self.step_island(island, h0)?;
+            let fast = turning
+                .iter()
+                .any(|(p, _, fast)| *fast && island.pairs.binary_search(p).is_ok());
+            let h = self.step_island(island, h0, fast)?;
             for p in &island.pairs {
                 if let Some(held) = self.islands.held.get_mut(p) {
                     held.span = h;
@@ -524,13 +504,20 @@ impl World {
 
     /// Solves one island's contacts over the coming step of length `h0`, sets its bodies' held
     /// contact loads, and returns the step's length (shortened to a slip → stick transition).
-    fn step_island(&mut self, island: &Island, h0: f64) -> Result<f64, SimError> {
+    fn step_island(&mut self, island: &Island, mut h0: f64, fast: bool) -> Result<f64, SimError> {
         let settings = self.islands.settings;
         let v_micro = self.micro_speed();
         let v_s = self.switch_speed();
+        // A fast-turning island's geometry moves by up to half the envelope over a step (the
+        // curvature its step allows): a solve far tighter than that buys nothing.
+        let tolerance_factor = if fast {
+            settings.solver_tolerance_factor.max(FAST_TOLERANCE_FACTOR)
+        } else {
+            settings.solver_tolerance_factor
+        };
         let solver = SolverSettings {
             max_iterations: settings.max_sweeps,
-            tolerance: (settings.solver_tolerance_factor * v_micro).max(f64::MIN_POSITIVE),
+            tolerance: (tolerance_factor * v_micro).max(f64::MIN_POSITIVE),
             direct_after: Some(settings.direct_after),
         };
         // Bodies: the island's dynamic bodies, then the fixed and scripted ones it touches.
@@ -564,8 +551,35 @@ impl World {
             let friction = self.material(p.0, p.1).friction;
             let (dyn_a, dyn_b) = (self.b(p.0).is_dynamic(), self.b(p.1).is_dynamic());
             let held = &self.islands.held[&p];
-            for (m, (man, imp)) in held.manifolds.iter().zip(&held.impulses).enumerate() {
-                for (q, point) in man.points().iter().enumerate() {
+            // A manifold's points, each manifold a patch; then the outside points, each a
+            // patch of its own (they are vertices at different heights, which no plane of
+            // gaps fits), with no warm start.
+            let mut lone = 0;
+            let outside = held
+                .outside
+                .iter()
+                .enumerate()
+                .flat_map(|(m, o)| o.iter().map(move |point| (m, point)));
+            let listed = held
+                .manifolds
+                .iter()
+                .zip(&held.impulses)
+                .enumerate()
+                .flat_map(|(m, (man, imp))| {
+                    man.points()
+                        .iter()
+                        .enumerate()
+                        .map(move |(q, point)| (m, man.normal, point, Some(imp[q]), q))
+                })
+                .chain(outside.map(|(m, point)| (m, held.manifolds[m].normal, point, None, 0)));
+            for (m, normal, point, warm, q) in listed {
+                let m = if warm.is_some() {
+                    m
+                } else {
+                    lone += 1;
+                    usize::MAX - lone
+                };
+                {
                     // Against a fixed or scripted body the contact acts at the moving body's
                     // surface (its lever arm exact, whatever the gap); between two moving
                     // bodies, midway.
@@ -579,10 +593,12 @@ impl World {
                         body1: kb,
                         body2: Some(ka),
                         point: at,
-                        normal: man.normal,
+                        normal,
                         friction,
                         target_normal_velocity: 0.0,
-                        impulse: self.contact_frame(man.normal)?.to_contact(imp[q]),
+                        impulse: self
+                            .contact_frame(normal)?
+                            .to_contact(warm.unwrap_or_default()),
                     });
                     gaps.push(point.gap);
                     origin.push((p, m, q));
@@ -595,13 +611,20 @@ impl World {
         // a step's drift) asked of the points one by one is a target no motion meets, and the
         // solver answers it with huge opposite impulses on redundant corners.
         let patches = patch_ranges(&origin);
+        let eps = self.collision_epsilon();
+        // Points beyond the envelope are speculative: they only keep the step from closing
+        // their gap (below).
+        let speculative: Vec<bool> = gaps.iter().map(|&g| g > eps).collect();
+        let raw_gaps = gaps.clone();
         let gaps = patch_plane_fit(&contacts, &patches, &gaps);
         // Transients: a held contact approaching (faster than STRUCK_FRACTION·v_s) gets an
         // impulsive solve of its island first (e = 0 between held contacts): the island reacts
         // to a strike at once, through its constraints, not over a step.
         let approach = contacts
             .iter()
-            .map(|c| normal_speed(&bodies, c))
+            .zip(&speculative)
+            .filter(|(_, s)| !**s)
+            .map(|(c, _)| normal_speed(&bodies, c))
             .fold(f64::INFINITY, f64::min);
         if approach < -STRUCK_FRACTION * v_s {
             let mut jolt = contacts.clone();
@@ -614,6 +637,9 @@ impl World {
             }
             self.solve(&mut bodies, &mut jolt, &solver)?;
             self.counters.transients += 1;
+            // The step was chosen from the speeds before the strike; the shortest one is all
+            // they vouch for now (the next step is chosen from the speeds after it).
+            h0 = h0.min(settings.min_step);
         }
         let after_jolt = bodies.clone();
         // The step: predict, solve, and locate a slip → stick transition.
@@ -632,10 +658,22 @@ impl World {
             for (c, &target) in contacts.iter_mut().zip(&targets) {
                 c.target_normal_velocity = target;
             }
+            // A speculative point may close its gap to ε_c within the step and no further:
+            // its mean normal speed over the step (the held load is constant, so the speed
+            // changes linearly) must not close more than the gap beyond ε_c.
+            for (k, c) in contacts.iter_mut().enumerate() {
+                if speculative[k] {
+                    let beyond = raw_gaps[k] - eps;
+                    let start = normal_speed(&after_jolt, c);
+                    c.target_normal_velocity = (-beyond / h).max(-2.0 * beyond / h - start);
+                }
+            }
             let mut trial = contacts.clone();
             self.solve(&mut bodies, &mut trial, &solver)?;
             solved = (predicted, trial);
-            if tries > MAX_LOCATE_SOLVES {
+            // A fast-turning island's contact points move over its bodies by up to half the
+            // envelope a step: a slip → stick transition is not located within it.
+            if tries > MAX_LOCATE_SOLVES || fast {
                 break;
             }
             // Per manifold (its points share the normal and frame): the fraction of the step
@@ -690,7 +728,10 @@ impl World {
         for (c, &(p, m, q)) in solution.iter().zip(&origin) {
             let world = self.contact_frame(c.normal)?.to_world(c.impulse);
             if let Some(held) = self.islands.held.get_mut(&p) {
-                held.impulses[m][q] = world;
+                // Outside points keep no impulse.
+                if m < held.impulses.len() {
+                    held.impulses[m][q] = world;
+                }
             }
         }
         Ok(h)
@@ -764,42 +805,6 @@ impl World {
             self.counters.sleeps += 1;
         }
     }
-}
-
-/// How fast rotation can move the two bodies' surfaces: ‖ω‖ times the rotational reach
-/// (zero for a ball turning about its centre, which keeps its distance to everything).
-pub(super) fn rotation_speed(a: &crate::body::Body, b: &crate::body::Body) -> f64 {
-    let turn = |x: &crate::body::Body| {
-        if x.is_dynamic() && !x.asleep {
-            x.omega.length() * x.max_reach()
-        } else {
-            0.0
-        }
-    };
-    turn(a) + turn(b)
-}
-
-/// How fast another feature of a held pair can approach: its bodies' rotation
-/// ([`rotation_speed`]) plus their centres' relative speed along the contact normal `n` (a body
-/// pivoting on an edge moves its centre toward the other body as it turns). Sliding along the
-/// contact plane brings no feature of two convex pieces closer, but it can bring another
-/// piece of a compound body (a ball rolling from a dish's slope onto its floor): with a
-/// compound, or when no normal is known yet, the whole relative speed of the centres counts.
-pub(super) fn turn_speed(a: &crate::body::Body, b: &crate::body::Body, n: Option<DVec3>) -> f64 {
-    let v = |x: &crate::body::Body| {
-        if x.is_dynamic() && !x.asleep {
-            x.velocity
-        } else {
-            DVec3::ZERO
-        }
-    };
-    let dv = v(a) - v(b);
-    let compound = a.reach.len() > 1 || b.reach.len() > 1;
-    let normal = match n {
-        Some(n) if !compound => dv.dot(n.normalize_or_zero()).abs(),
-        _ => dv.length(),
-    };
-    rotation_speed(a, b) + normal
 }
 
 /// Relative normal speed of a contact (positive apart).

@@ -43,6 +43,7 @@
 mod api;
 mod check;
 mod control;
+mod hold;
 mod hybrid;
 mod hybrid_contact;
 mod hybrid_step;
@@ -825,3 +826,5 @@ mod hybrid_tests;
 
 #[cfg(test)]
 mod step_tests;
+#[cfg(test)]
+mod turning_tests;

@@ -1,0 +1,245 @@
+//! Which pairs the islands hold, and how long an island may step with them (module
+//! documentation of [`crate::sustained`], "Step rate and turning" in
+//! `docs/sustained-contact.md`).
+//!
+//! A held pair is in one of two regimes ([`World::pair_contact`]):
+//! - **slow**: its bodies turn slowly enough that no feature outside its points within ε_c can
+//!   come through the rest of the envelope within the shortest step; it steps at the rate
+//!   that keeps it so ([`World::rotation_step`]);
+//! - **fast**: its manifold reaches a margin beyond ε_c ([`World::speculative_margin`]), its
+//!   unheld vertices over the other's contact face are points too
+//!   ([`impulse_collide::manifold::shape_outside`]), and its step is bounded by the curvature
+//!   of its turning ([`World::curvature_step`]) and by the clearance of what its manifold
+//!   leaves out.
+//!
+//! A pair needing a step below the shortest one, or whose points within ε_c meet or part
+//! like an impact, is too fast to hold: the event loop takes it back.
+
+use glam::DVec3;
+use impulse_collide::manifold::{self, ContactPoint, Manifold, ManifoldCache};
+
+use super::World;
+use crate::error::SimError;
+
+/// Fraction of the envelope left above the rest gap that turning may use up within one
+/// island step: the rest covers the angular acceleration within the step (the step is chosen
+/// from the speeds at its start). Default `0.5`.
+pub(super) const TURN_STEP_SAFETY: f64 = 0.5;
+
+/// What [`World::pair_contact`] found.
+pub(super) enum PairContact {
+    /// No point within the envelope: the pair lifted off.
+    Apart,
+    /// The pair turns or approaches too fast to be held even over the shortest step.
+    TooFast,
+    /// The pair can be held: its manifolds and the island step it needs; `fast`: it turns too
+    /// fast to be held by its points within ε_c alone (speculative points, a looser solve).
+    Held {
+        manifolds: Vec<Manifold>,
+        /// Per manifold, the vertex–face points of vertices outside its contact features
+        /// ([`impulse_collide::manifold::shape_outside`]).
+        outside: Vec<Vec<ContactPoint>>,
+        step: f64,
+        fast: bool,
+    },
+}
+
+impl World {
+    /// What is left of the contact envelope above a held contact's rest gap,
+    /// (1 − g_r/ε_c)·ε_c: rotation must not bring another feature through it within a step.
+    fn envelope_left(&self) -> f64 {
+        (1.0 - self.islands.settings.rest_gap_fraction) * self.collision_epsilon()
+    }
+
+    /// The turning acceleration ([`spin_accel`]) for which the shortest island step is needed
+    /// ([`TURN_STEP_SAFETY`]): above it the pair is released to the event loop, below half of
+    /// it a pair may be held. A held pair's contact points include every feature its turning
+    /// can bring within reach over a step (speculative points, [`Self::speculative_margin`]),
+    /// so only the curvature of the motion, which a step's linear prediction misses, bounds
+    /// the step: ½·a·h² within the envelope left above the rest gap.
+    pub(super) fn spin_limit(&self) -> f64 {
+        let h = self.islands.settings.min_step;
+        2.0 * TURN_STEP_SAFETY * self.envelope_left() / (h * h)
+    }
+
+    /// The turning speed ([`turn_speed`]) for which the shortest island step is needed when
+    /// a pair is held by its points within ε_c alone ([`TURN_STEP_SAFETY`]). A pair turning
+    /// faster is held with speculative points ([`Self::pair_contact`]).
+    pub(super) fn rotation_limit(&self) -> f64 {
+        TURN_STEP_SAFETY * self.envelope_left() / self.islands.settings.min_step
+    }
+
+    /// The island step a pair whose surfaces rotation moves at `speed` needs when it is held by
+    /// its points within ε_c alone: short enough that no other feature comes through the rest
+    /// of the envelope, within [`SustainedSettings::min_step`] and [`SustainedSettings::step`].
+    fn rotation_step(&self, speed: f64) -> f64 {
+        let s = &self.islands.settings;
+        if speed > 0.0 {
+            (TURN_STEP_SAFETY * self.envelope_left() / speed).clamp(s.min_step, s.step)
+        } else {
+            s.step
+        }
+    }
+
+    /// The island step a pair whose surfaces turning accelerates at `accel` needs: short
+    /// enough that the curvature of the motion over the step, ½·a·h², stays within
+    /// [`TURN_STEP_SAFETY`] of the envelope left, within [`SustainedSettings::min_step`] and
+    /// [`SustainedSettings::step`].
+    fn curvature_step(&self, accel: f64) -> f64 {
+        let s = &self.islands.settings;
+        if accel > 0.0 {
+            (2.0 * TURN_STEP_SAFETY * self.envelope_left() / accel)
+                .sqrt()
+                .clamp(s.min_step, s.step)
+        } else {
+            s.step
+        }
+    }
+
+    /// How far beyond ε_c a held pair's manifold reaches for points: the distance another
+    /// feature can close at the pair's approach speed `turn` ([`turn_speed`]) over the
+    /// nominal step.
+    fn speculative_margin(&self, turn: f64) -> f64 {
+        turn * self.islands.settings.step
+    }
+
+    /// A pair's contact as the islands would hold it: its manifolds (with the speculative
+    /// points its motion can reach within a step, [`Self::speculative_margin`]) and the island
+    /// step it needs: short enough that the curvature of its turning stays inside the
+    /// envelope ([`Self::rotation_step`]) and that no feature outside its manifolds can
+    /// arrive ([`TURN_STEP_SAFETY`] of the manifolds' clearance,
+    /// [`impulse_collide::manifold::shape_clearance`], over the pair's approach speed). A
+    /// pair that needs less than [`SustainedSettings::min_step`] is too fast to hold.
+    /// `struck`: the pair's approach is a strike about to be stopped (only rotation counts).
+    pub(super) fn pair_contact(
+        &self,
+        (a, b): (u32, u32),
+        struck: bool,
+        margin: f64,
+        cache: &mut ManifoldCache,
+    ) -> Result<PairContact, SimError> {
+        let (ba, bb) = (self.b(a), self.b(b));
+        let s = &self.islands.settings;
+        let eps = self.collision_epsilon();
+        let turn_along = |n: Option<DVec3>| {
+            if struck {
+                rotation_speed(ba, bb)
+            } else {
+                turn_speed(ba, bb, n)
+            }
+        };
+        let manifolds = |tolerance: f64, cache: &mut ManifoldCache| {
+            manifold::shape_manifolds(&ba.shape, &ba.pose, &bb.shape, &bb.pose, tolerance, cache)
+                .map_err(|e| {
+                    self.runtime(format!(
+                        "contact manifold of {} / {}: {e}",
+                        ba.name, bb.name
+                    ))
+                })
+        };
+        // Lift-off: no point within the envelope.
+        let found = manifolds(eps, cache)?;
+        if found.iter().all(|m| m.min_gap() > eps) {
+            return Ok(PairContact::Apart);
+        }
+        // Slow: no other feature can come through the envelope within the shortest step.
+        let turn = turn_along(Some(found[0].normal));
+        if turn <= margin * self.rotation_limit() {
+            let outside = vec![Vec::new(); found.len()];
+            return Ok(PairContact::Held {
+                manifolds: found,
+                outside,
+                step: self.rotation_step(turn),
+                fast: false,
+            });
+        }
+        // Fast: only a turning contact. A point within the envelope whose surfaces meet or
+        // part faster than the first-order limit is an impact (a ball of the rack struck by
+        // the cue ball): even the shortest step could not hold it inside the envelope, and
+        // it is the event loop's, as a collision with its restitution.
+        let normal_speed = found
+            .iter()
+            .flat_map(|m| m.points().iter().map(move |p| (m.normal, p)))
+            .filter(|(_, p)| p.gap <= eps)
+            .map(|(n, p)| {
+                let x = p.midpoint();
+                (bb.point_velocity(x) - ba.point_velocity(x)).dot(n).abs()
+            })
+            .fold(0.0, f64::max);
+        if normal_speed > margin * self.rotation_limit() {
+            return Ok(PairContact::TooFast);
+        }
+        // Then speculative points, and a step the curvature and the clearance allow.
+        let accel = spin_accel(ba, bb);
+        if accel > margin * self.spin_limit() {
+            return Ok(PairContact::TooFast);
+        }
+        let turn = turn_along(None);
+        let reach = eps + self.speculative_margin(turn);
+        let found = manifolds(reach, cache)?;
+        let (outside, clearance) =
+            manifold::shape_outside(&ba.shape, &ba.pose, &bb.shape, &bb.pose, &found, reach);
+        let step = self
+            .curvature_step(accel)
+            .min(TURN_STEP_SAFETY * clearance / turn);
+        if step * margin < s.min_step {
+            return Ok(PairContact::TooFast);
+        }
+        Ok(PairContact::Held {
+            manifolds: found,
+            outside,
+            step,
+            fast: true,
+        })
+    }
+}
+
+/// How fast rotation can accelerate the two bodies' surfaces: Σ ‖ω‖²·r over both (the
+/// centripetal acceleration of the farthest point of each), the curvature of the motion a
+/// step's linear prediction misses.
+pub(super) fn spin_accel(a: &crate::body::Body, b: &crate::body::Body) -> f64 {
+    let spin = |x: &crate::body::Body| {
+        if x.is_dynamic() && !x.asleep {
+            x.omega.length_squared() * x.max_reach()
+        } else {
+            0.0
+        }
+    };
+    spin(a) + spin(b)
+}
+
+/// How fast rotation can move the two bodies' surfaces: ‖ω‖ times the rotational reach
+/// (zero for a ball turning about its centre, which keeps its distance to everything).
+pub(super) fn rotation_speed(a: &crate::body::Body, b: &crate::body::Body) -> f64 {
+    let turn = |x: &crate::body::Body| {
+        if x.is_dynamic() && !x.asleep {
+            x.omega.length() * x.max_reach()
+        } else {
+            0.0
+        }
+    };
+    turn(a) + turn(b)
+}
+
+/// How fast another feature of a held pair can approach: its bodies' rotation
+/// ([`rotation_speed`]) plus their centres' relative speed along the contact normal `n` (a body
+/// pivoting on an edge moves its centre toward the other body as it turns). Sliding along the
+/// contact plane brings no feature of two convex pieces closer, but it can bring another
+/// piece of a compound body (a ball rolling from a dish's slope onto its floor): with a
+/// compound, or when no normal is known yet, the whole relative speed of the centres counts.
+pub(super) fn turn_speed(a: &crate::body::Body, b: &crate::body::Body, n: Option<DVec3>) -> f64 {
+    let v = |x: &crate::body::Body| {
+        if x.is_dynamic() && !x.asleep {
+            x.velocity
+        } else {
+            DVec3::ZERO
+        }
+    };
+    let dv = v(a) - v(b);
+    let compound = a.reach.len() > 1 || b.reach.len() > 1;
+    let normal = match n {
+        Some(n) if !compound => dv.dot(n.normalize_or_zero()).abs(),
+        _ => dv.length(),
+    };
+    rotation_speed(a, b) + normal
+}
