@@ -47,7 +47,7 @@ pub(super) enum PairContact {
 impl World {
     /// What is left of the contact envelope above a held contact's rest gap,
     /// (1 − g_r/ε_c)·ε_c: rotation must not bring another feature through it within a step.
-    fn envelope_left(&self) -> f64 {
+    pub(super) fn envelope_left(&self) -> f64 {
         (1.0 - self.islands.settings.rest_gap_fraction) * self.collision_epsilon()
     }
 
