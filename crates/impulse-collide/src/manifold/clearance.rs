@@ -68,54 +68,96 @@ pub fn convex_outside(
         (_, Feature::Face(_)) => (true, false),
         _ => (false, false),
     };
-    if let Convex::Polyhedron(p) = a {
-        let face = face_of(b, pose_b, m.features.b);
-        let held = |v: u32| m.points().iter().any(|q| q.id.a == Feature::Vertex(v));
-        for (v, x) in unheld(p, pose_a, held) {
-            // A vertex of `a` is at least low_b − x·n from `b`'s support plane.
-            let d = low_b - x.dot(n);
-            let onto = x + d * n;
+    // A vertex of `a` is at least low_b − x·n from `b`'s support plane, one of `b` at least
+    // x·n − top_a from `a`'s: each is the other's plane offset less x along its own normal.
+    let sides = [
+        (
+            Side::A,
+            a,
+            pose_a,
+            m.features.a,
+            b,
+            pose_b,
+            m.features.b,
+            n,
+            low_b,
+            clip_a,
+        ),
+        (
+            Side::B,
+            b,
+            pose_b,
+            m.features.b,
+            a,
+            pose_a,
+            m.features.a,
+            -n,
+            -top_a,
+            clip_b,
+        ),
+    ];
+    for (side, own, own_pose, feature, other, other_pose, other_feature, dir, plane, clip) in sides
+    {
+        let Convex::Polyhedron(p) = own else { continue };
+        let face = face_of(other, other_pose, other_feature);
+        let held = |v: u32| {
+            m.points()
+                .iter()
+                .any(|q| side.of(&q.id) == Feature::Vertex(v))
+        };
+        for (v, x) in unheld(p, own_pose, held) {
+            let d = plane - x.dot(dir);
+            let onto = x + d * dir;
             match face.as_ref().filter(|f| d <= tolerance && f.covers(onto)) {
-                Some(f) => out.points.push(ContactPoint {
-                    point_a: x,
-                    point_b: onto,
-                    gap: d,
-                    id: FeaturePair {
-                        a: Feature::Vertex(v),
-                        b: Feature::Face(f.index),
-                    },
-                }),
+                Some(f) => out.points.push(side.point(v, x, f.index, onto, d)),
                 // A vertex of the clipped contact feature off the other's contact face: the
                 // points where the feature crosses the face's side planes stand for it.
-                None if clip_a && in_feature(p, m.features.a, v) => {}
-                None => out.clearance = out.clearance.min(distance_bound(b, pose_b, x, d)),
-            }
-        }
-    }
-    if let Convex::Polyhedron(p) = b {
-        let face = face_of(a, pose_a, m.features.a);
-        let held = |w: u32| m.points().iter().any(|q| q.id.b == Feature::Vertex(w));
-        for (w, x) in unheld(p, pose_b, held) {
-            // A vertex of `b` is at least x·n − top_a from `a`'s support plane.
-            let d = x.dot(n) - top_a;
-            let onto = x - d * n;
-            match face.as_ref().filter(|f| d <= tolerance && f.covers(onto)) {
-                Some(f) => out.points.push(ContactPoint {
-                    point_a: onto,
-                    point_b: x,
-                    gap: d,
-                    id: FeaturePair {
-                        a: Feature::Face(f.index),
-                        b: Feature::Vertex(w),
-                    },
-                }),
-                None if clip_b && in_feature(p, m.features.b, w) => {}
-                None => out.clearance = out.clearance.min(distance_bound(a, pose_a, x, d)),
+                None if clip && in_feature(p, feature, v) => {}
+                None => {
+                    out.clearance = out.clearance.min(distance_bound(other, other_pose, x, d));
+                }
             }
         }
     }
     out.clearance = out.clearance.max(0.0);
     out
+}
+
+/// Which piece of the pair a vertex belongs to.
+#[derive(Clone, Copy)]
+enum Side {
+    A,
+    B,
+}
+
+impl Side {
+    /// This side's feature of a point's id.
+    fn of(self, id: &FeaturePair) -> Feature {
+        match self {
+            Side::A => id.a,
+            Side::B => id.b,
+        }
+    }
+
+    /// The vertex–face point of this side's vertex `v` at `x` over the other's face `f`, at
+    /// `onto` on it, `gap` apart.
+    fn point(self, v: u32, x: DVec3, f: u32, onto: DVec3, gap: f64) -> ContactPoint {
+        let (vertex, face) = (Feature::Vertex(v), Feature::Face(f));
+        match self {
+            Side::A => ContactPoint {
+                point_a: x,
+                point_b: onto,
+                gap,
+                id: FeaturePair { a: vertex, b: face },
+            },
+            Side::B => ContactPoint {
+                point_a: onto,
+                point_b: x,
+                gap,
+                id: FeaturePair { a: face, b: vertex },
+            },
+        }
+    }
 }
 
 /// A lower bound on the distance from the world point `x` to the piece `c`: the largest

@@ -194,31 +194,26 @@ impl World {
     }
 }
 
+/// ‖ω‖ᵏ·r of a body (r its rotational reach), zero for a fixed or sleeping one.
+fn spin_power(x: &crate::body::Body, k: i32) -> f64 {
+    if x.is_dynamic() && !x.asleep {
+        x.omega.length().powi(k) * x.max_reach()
+    } else {
+        0.0
+    }
+}
+
 /// How fast rotation can accelerate the two bodies' surfaces: Σ ‖ω‖²·r over both (the
 /// centripetal acceleration of the farthest point of each), the curvature of the motion a
 /// step's linear prediction misses.
 pub(super) fn spin_accel(a: &crate::body::Body, b: &crate::body::Body) -> f64 {
-    let spin = |x: &crate::body::Body| {
-        if x.is_dynamic() && !x.asleep {
-            x.omega.length_squared() * x.max_reach()
-        } else {
-            0.0
-        }
-    };
-    spin(a) + spin(b)
+    spin_power(a, 2) + spin_power(b, 2)
 }
 
 /// How fast rotation can move the two bodies' surfaces: ‖ω‖ times the rotational reach
 /// (zero for a ball turning about its centre, which keeps its distance to everything).
 pub(super) fn rotation_speed(a: &crate::body::Body, b: &crate::body::Body) -> f64 {
-    let turn = |x: &crate::body::Body| {
-        if x.is_dynamic() && !x.asleep {
-            x.omega.length() * x.max_reach()
-        } else {
-            0.0
-        }
-    };
-    turn(a) + turn(b)
+    spin_power(a, 1) + spin_power(b, 1)
 }
 
 /// How fast another feature of a held pair can approach: its bodies' rotation
