@@ -71,7 +71,7 @@ impl World {
 
     /// The island step a pair whose surfaces rotation moves at `speed` needs when it is held by
     /// its points within ε_c alone: short enough that no other feature comes through the rest
-    /// of the envelope, within [`SustainedSettings::min_step`] and [`SustainedSettings::step`].
+    /// of the envelope, within [`crate::sustained::SustainedSettings::min_step`] and [`crate::sustained::SustainedSettings::step`].
     fn rotation_step(&self, speed: f64) -> f64 {
         let s = &self.islands.settings;
         if speed > 0.0 {
@@ -83,8 +83,8 @@ impl World {
 
     /// The island step a pair whose surfaces turning accelerates at `accel` needs: short
     /// enough that the curvature of the motion over the step, ½·a·h², stays within
-    /// [`TURN_STEP_SAFETY`] of the envelope left, within [`SustainedSettings::min_step`] and
-    /// [`SustainedSettings::step`].
+    /// [`TURN_STEP_SAFETY`] of the envelope left, within [`crate::sustained::SustainedSettings::min_step`] and
+    /// [`crate::sustained::SustainedSettings::step`].
     fn curvature_step(&self, accel: f64) -> f64 {
         let s = &self.islands.settings;
         if accel > 0.0 {
@@ -103,14 +103,14 @@ impl World {
         turn * self.islands.settings.step
     }
 
-    /// A pair's contact as the islands would hold it: its manifolds (with the speculative
-    /// points its motion can reach within a step, [`Self::speculative_margin`]) and the island
-    /// step it needs: short enough that the curvature of its turning stays inside the
-    /// envelope ([`Self::rotation_step`]) and that no feature outside its manifolds can
-    /// arrive ([`TURN_STEP_SAFETY`] of the manifolds' clearance,
-    /// [`impulse_collide::manifold::shape_clearance`], over the pair's approach speed). A
-    /// pair that needs less than [`SustainedSettings::min_step`] is too fast to hold.
-    /// `struck`: the pair's approach is a strike about to be stopped (only rotation counts).
+    /// A pair's contact as the islands would hold it (module documentation): its manifolds,
+    /// with speculative and outside points in the fast regime, and the island step it needs.
+    /// A pair that needs less than [`crate::sustained::SustainedSettings::min_step`], or whose
+    /// points within ε_c meet or part faster than the slow regime allows (an impact), is too
+    /// fast to hold. `struck`: the pair's approach is a strike about to be stopped (only
+    /// rotation counts). `margin`: 1 for the island's own decision, `HOLD_ROTATION_FRACTION`
+    /// (in `check.rs`) when the event loop asks whether to hold, so that every limit has room
+    /// to spare.
     pub(super) fn pair_contact(
         &self,
         (a, b): (u32, u32),
