@@ -22,9 +22,11 @@ pub const NORMAL_FROM_POINTS_REL: f64 = 1e-9;
 /// follows it. Default `1e-6`.
 pub const OVERLAP_NORMAL_TURN: f64 = 1e-6;
 
-/// A pair is held only while rotation moves its surfaces slower than this fraction of the
-/// speed at which a held pair is released ([`World::rotation_limit`]): the gap between the two
-/// keeps a rocking body from switching at every step. Default `0.5`.
+/// The event loop holds a pair only with room to spare: [`World::pair_contact`] asked with
+/// this margin on each of its limits (the slow regime's turn speed, an impact's speed at a
+/// point, the turning acceleration, and the shortest step, which in turn caps the
+/// acceleration at a quarter of its limit), so that a pair just held is not released at its
+/// first island step and a rocking body does not switch at every step. Default `0.5`.
 pub const HOLD_ROTATION_FRACTION: f64 = 0.5;
 
 /// The result of checking a pair: the closest piece pair, and the distance and normal of
@@ -521,8 +523,8 @@ impl World {
 
     /// Whether a contact found at `x` along `n` becomes a held (sustained) contact instead of
     /// a collision: in the switching model, when a body of the pair is dynamic, the contact
-    /// neither approaches nor separates faster than the switching speed, and the pair does
-    /// not turn fast ([`HOLD_ROTATION_FRACTION`]; [`crate::sustained`]).
+    /// neither approaches nor separates faster than the switching speed, and the islands can
+    /// hold the pair with room to spare ([`HOLD_ROTATION_FRACTION`]; [`crate::sustained`]).
     fn holds(&self, (a, b): (u32, u32), x: DVec3, n: DVec3) -> bool {
         if !self.switching() {
             return false;
@@ -537,7 +539,7 @@ impl World {
 
     /// Whether a pair found approaching within ε_c is held instead of struck again: in the
     /// switching model, when it took a collision impulse at this very instant and a body of it
-    /// is dynamic and neither turns fast ([`HOLD_ROTATION_FRACTION`]). Bodies pressed together
+    /// is dynamic and the islands can hold it ([`HOLD_ROTATION_FRACTION`]). Bodies pressed together
     /// by other impacts at one instant (a heavy ball landing on a stack of light boxes) would
     /// otherwise trade collisions without end: each exchange between a body 1000 times lighter
     /// and a heavier one passes on a thousandth of the momentum. Held, the pairs are solved

@@ -52,8 +52,9 @@ impl World {
     }
 
     /// The turning acceleration ([`spin_accel`]) for which the shortest island step is needed
-    /// ([`TURN_STEP_SAFETY`]): above it the pair is released to the event loop, below half of
-    /// it a pair may be held. A held pair's contact points include every feature its turning
+    /// ([`TURN_STEP_SAFETY`]): above it the pair is released to the event loop (and the event
+    /// loop holds it again only below a quarter of it, the shortest step taken with the hold
+    /// margin). A held pair's contact points include every feature its turning
     /// can bring within reach over a step (speculative points, [`Self::speculative_margin`]),
     /// so only the curvature of the motion, which a step's linear prediction misses, bounds
     /// the step: ½·a·h² within the envelope left above the rest gap.
