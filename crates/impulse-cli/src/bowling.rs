@@ -139,10 +139,7 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
             args.seed, args.throws
         ));
     }
-    let shard = match &args.shard {
-        Some(s) => s.parse::<Shard>().map_err(|e| format!("--shard: {e}"))?,
-        None => Shard::ALL,
-    };
+    let shard = crate::study_io::shard_arg(args.shard.as_deref())?;
     let started = Instant::now();
     let (file, ran) = match &args.from {
         Some(path) => (read_file(path)?, false),
@@ -178,7 +175,7 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
                 outcomes,
             };
             if let Some(out) = &args.out {
-                write_file(out, &file)?;
+                crate::study_io::write_json(out, &file)?;
             }
             (file, true)
         }
@@ -321,18 +318,10 @@ fn report(file: &BowlingFile, shard: Shard, wall: Option<f64>) -> String {
 }
 
 fn read_file(path: &Path) -> Result<BowlingFile, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let file: BowlingFile = serde_json::from_str(&text)
-        .map_err(|e| format!("{}: not a bowling study file: {e}", path.display()))?;
+    let file: BowlingFile = crate::study_io::read_json(path, "bowling study")?;
     file.check()
         .map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(file)
-}
-
-fn write_file(path: &Path, file: &BowlingFile) -> Result<(), String> {
-    let text = serde_json::to_string_pretty(file).map_err(|e| e.to_string())?;
-    std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
 fn merge(files: &[PathBuf], out: &Path) -> Result<String, String> {
@@ -341,7 +330,7 @@ fn merge(files: &[PathBuf], out: &Path) -> Result<String, String> {
         .map(|f| read_file(f))
         .collect::<Result<Vec<_>, _>>()?;
     let merged = bowling::merge(&studies).map_err(|e| e.to_string())?;
-    write_file(out, &merged)?;
+    crate::study_io::write_json(out, &merged)?;
     let have = merged.outcomes.len() as u64;
     let total = 2 * merged.throws_per_kind;
     let mut t = format!(

@@ -22,6 +22,7 @@ mod dynamics;
 mod poses;
 mod reduce;
 mod run;
+mod study_io;
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};

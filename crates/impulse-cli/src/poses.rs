@@ -137,10 +137,7 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
             part.name, args.seed
         ));
     }
-    let shard = match &args.shard {
-        Some(s) => s.parse::<Shard>().map_err(|e| format!("--shard: {e}"))?,
-        None => Shard::ALL,
-    };
+    let shard = crate::study_io::shard_arg(args.shard.as_deref())?;
     let started = Instant::now();
     let (file, ran) = match &args.from {
         Some(path) => (read_study(path)?, false),
@@ -174,7 +171,7 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
                 outcomes,
             };
             if let Some(out) = &args.out {
-                write_study(out, &file)?;
+                crate::study_io::write_json(out, &file)?;
             }
             (file, true)
         }
@@ -308,15 +305,7 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
 }
 
 fn read_study(path: &Path) -> Result<StudyFile, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    serde_json::from_str(&text)
-        .map_err(|e| format!("{}: not a pose study file: {e}", path.display()))
-}
-
-fn write_study(path: &Path, file: &StudyFile) -> Result<(), String> {
-    let text = serde_json::to_string_pretty(file).map_err(|e| e.to_string())?;
-    std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))
+    crate::study_io::read_json(path, "pose study")
 }
 
 fn merge(files: &[PathBuf], out: &Path) -> Result<String, String> {
@@ -325,7 +314,7 @@ fn merge(files: &[PathBuf], out: &Path) -> Result<String, String> {
         .map(|f| read_study(f))
         .collect::<Result<Vec<_>, _>>()?;
     let merged = poses::merge(&studies).map_err(|e| e.to_string())?;
-    write_study(out, &merged)?;
+    crate::study_io::write_json(out, &merged)?;
     let have = merged.outcomes.len() as u64;
     let mut t = format!(
         "merged {} files: {have} of {} drops of \"{}\" into {}",

@@ -14,11 +14,7 @@ const POCKET_STUDY: [&str; 8] = [
 
 /// The printed figures, without the run's wall time and the shard line.
 fn figures(stdout: &str) -> String {
-    stdout
-        .lines()
-        .skip_while(|l| !l.starts_with("mean pins felled"))
-        .collect::<Vec<_>>()
-        .join("\n")
+    common::lines_from(stdout, "mean pins felled")
 }
 
 #[test]

@@ -16,11 +16,7 @@ fn part(name: &str) -> PathBuf {
 
 /// The table's lines (from the header on), without the run's wall time.
 fn table(stdout: &str) -> String {
-    stdout
-        .lines()
-        .skip_while(|l| !l.starts_with("pose"))
-        .collect::<Vec<_>>()
-        .join("\n")
+    common::lines_from(stdout, "pose")
 }
 
 #[test]

@@ -68,3 +68,13 @@ pub fn impulse_text(args: &[&str]) -> (bool, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// The lines of `stdout` from the first that starts with `first` on: a report's figures,
+/// without the run's wall time and shard lines above them.
+pub fn lines_from(stdout: &str, first: &str) -> String {
+    stdout
+        .lines()
+        .skip_while(|l| !l.starts_with(first))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
