@@ -10,7 +10,7 @@
 //!
 //! | pieces | depth | normal |
 //! |---|---|---|
-//! | polyhedron–polyhedron | exact: separating-axis test over face normals and edge pairs ([`crate::brute::sat_axis`]) | the axis attaining it |
+//! | polyhedron–polyhedron | exact: separating-axis test over face normals and the edge pairs that form faces of the Minkowski difference ([`crate::sat::polyhedra_axis`]) | the axis attaining it |
 //! | sphere–sphere | exact: `r₁ + r₂ − |c₁ − c₂|` | line of centres |
 //! | sphere–polyhedron | exact: `r − δ`, δ the centre's signed distance to the polyhedron ([`crate::point::closest_point`]) | centre to its closest point, or the nearest face's normal when inside |
 //! | with an ellipsoid | an upper bound: the least overlap of the support functions over the polyhedral face normals and the line of centres (exact when a face normal is the deepest axis, as for an ellipsoid resting on a face) | the axis attaining it |
@@ -18,9 +18,9 @@
 use glam::DVec3;
 use impulse_geom::Pose;
 
-use crate::brute;
 use crate::feature::Feature;
 use crate::point;
+use crate::sat;
 use crate::shape::{Convex, Shape};
 
 /// How two convex pieces overlap.
@@ -56,7 +56,7 @@ pub fn convex_penetration(
 pub fn separating_axis(a: &Convex, pose_a: &Pose, b: &Convex, pose_b: &Pose) -> Penetration {
     match (a, b) {
         (Convex::Polyhedron(x), Convex::Polyhedron(y)) => {
-            let (separation, normal) = brute::sat_axis(x, pose_a, y, pose_b);
+            let (separation, normal) = sat::polyhedra_axis(x, pose_a, y, pose_b);
             Penetration {
                 depth: -separation,
                 normal,
@@ -190,6 +190,7 @@ fn support_overlap(a: &Convex, pose_a: &Pose, b: &Convex, pose_b: &Pose) -> Pene
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::brute;
     use crate::motion::testkit::{random_rotation, rng, unit_vector};
     use glam::DQuat;
     use impulse_geom::{Ellipsoid, Sphere, primitives};

@@ -9,7 +9,8 @@
 //!   ([`shape`]);
 //! - brute-force references for all of these ([`brute`]);
 //! - what a distance-zero query cannot say: the penetration depth and contact normal of
-//!   pieces that touch or overlap ([`depth`]), and the near vertices of a face-on contact
+//!   pieces that touch or overlap ([`depth`], by the separating-axis search pruned on the
+//!   Gauss map, [`sat`]), and the near vertices of a face-on contact
 //!   ([`patch`]);
 //! - contact manifolds of touching pieces: up to four points from the closest features (face
 //!   clipping, edge and vertex contacts, smooth pieces), each named by the features that
@@ -39,6 +40,7 @@ pub mod motion;
 pub mod patch;
 pub mod point;
 pub mod root;
+pub mod sat;
 pub mod schedule;
 pub mod shape;
 pub mod toi;
