@@ -45,6 +45,7 @@ fn stack(n: usize) -> (Vec<IslandBody>, Vec<Contact>) {
                 normal: DVec3::Z,
                 friction: 0.6,
                 target_normal_velocity: 0.0,
+                velocity_bias: DVec3::ZERO,
                 impulse: DVec3::ZERO,
             });
         }

@@ -30,6 +30,10 @@
 //!   every body is ballistic under gravity, its loads and its held contact load — the motion
 //!   model the event loop's time-of-impact bounds already cover. Velocities stay continuous;
 //!   a sliding body's motion under constant friction is exact, and a ball rolls without hops.
+//!   The contact law holds for each point's velocity at the step's end: a polyhedron's
+//!   contact vertex or edge turns with its body, which adds h·ω×(ω×r) to the velocity its
+//!   lever arm at the start gives (`impulse_response::Contact::velocity_bias`); left out, a
+//!   pivoting edge climbs off its support by ½·h²·ω²·r a step.
 //!   Full steps end on the grid of multiples of `h` in absolute time, so islands step at
 //!   the same instants and share the event loop's steps (each of which advances every body).
 //! - **Position stabilisation**: a held contact rests at the gap g_r = `rest_gap_fraction`·ε_c
@@ -50,8 +54,9 @@
 //!   at its end, the step is shortened to the instant sliding friction stops the slip
 //!   (the fraction |p_t|/(μ·p_n) of the step), so slip → stick is located, not rounded to h.
 //! - **Transients**: a held contact whose normal speed at a step is an approach (faster than
-//!   a hundredth of `v_s`: a body was struck, an impulse or a new load was applied) is first
-//!   resolved by an
+//!   a hundredth of `v_s`: a body was struck, an impulse or a new load was applied), and one
+//!   that the step's constant load could not stop within a quarter of the rest gap
+//!   (|u_n|·h/2), is first resolved by an
 //!   impulsive solve of its island (velocity jumps, e = 0 between held contacts: the island
 //!   reacts through its constraints), then stepped as usual. A struck body itself gets the
 //!   chapter-3 collision from the event loop.

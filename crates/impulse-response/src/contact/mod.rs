@@ -28,7 +28,8 @@
 //! (u_f = u₀ + W·P; its diagonal blocks are the pairs' K) and u₀, u_f the contact velocities
 //! before and after, ΔT = P·u₀ + ½PᵀWP = P·u_f − ½PᵀWP, and P·u_f = Σ p_n u_n + p_t·u_t ≤ 0
 //! by complementarity and the cone. (A single sweep may add a little, where a smaller normal
-//! impulse shrinks the disk under a friction impulse.)
+//! impulse shrinks the disk under a friction impulse.) A [`Contact::velocity_bias`] b moves
+//! the law to u + b: the bound becomes P·u_f ≤ −P·b.
 //! It stops when no impulse update changed a contact velocity by more than
 //! [`SolverSettings::tolerance`], or after [`SolverSettings::max_iterations`] sweeps.
 //!
@@ -83,6 +84,11 @@ pub struct Contact {
     /// The normal relative velocity the contact may not go below, u_n ≥ this (0 for resting
     /// contact; positive to push an overlap apart).
     pub target_normal_velocity: f64,
+    /// A relative velocity (world) added to the contact's before its law is applied: the
+    /// solve makes u + this obey non-penetration and Coulomb's law, and friction opposes the
+    /// slip u + this. Zero for the plain law; a stepper whose contact velocities are measured
+    /// with lever arms that turn over its step passes the change those arms miss.
+    pub velocity_bias: DVec3,
     /// Accumulated impulse (p_t1, p_t2, p_n) in the contact frame
     /// ([`ContactFrame::from_normal`] of `normal`): the warm start on entry, the solution on
     /// return.
@@ -145,6 +151,8 @@ struct Row {
     k_t: f64,
     /// The collision matrix in the contact frame (Δu = K·Δp).
     k: DMat3,
+    /// [`Contact::velocity_bias`] in the contact frame.
+    bias: DVec3,
 }
 
 /// Finds the contact impulses of one step and applies them to the bodies' velocities (see the
@@ -215,7 +223,8 @@ fn sweep_contact(bodies: &mut [IslandBody], c: &mut Contact, row: &Row) -> f64 {
     (row.k_nn * dp_n.abs()).max(row.k_t * dp_t.length())
 }
 
-/// The relative contact velocity u = u₁ − u₂ in the contact frame.
+/// The relative contact velocity u = u₁ − u₂ in the contact frame, with the contact's
+/// [`Contact::velocity_bias`].
 fn contact_velocity(bodies: &[IslandBody], c: &Contact, row: &Row) -> DVec3 {
     let b1 = &bodies[c.body1];
     let (v2, w2) = match c.body2 {
@@ -223,7 +232,7 @@ fn contact_velocity(bodies: &[IslandBody], c: &Contact, row: &Row) -> DVec3 {
         None => (DVec3::ZERO, DVec3::ZERO),
     };
     let u = relative_contact_velocity(b1.velocity, b1.omega, row.r1, v2, w2, row.r2);
-    row.frame.to_contact(u)
+    row.frame.to_contact(u) + row.bias
 }
 
 /// Applies `dp` (contact frame) to body 1 and −dp to body 2.
@@ -321,9 +330,9 @@ fn prepare_row(bodies: &[IslandBody], c: &Contact) -> Result<Row, ResponseError>
             what: "contact target normal velocity",
         });
     }
-    if !(c.point.is_finite() && c.impulse.is_finite()) {
+    if !(c.point.is_finite() && c.impulse.is_finite() && c.velocity_bias.is_finite()) {
         return Err(ResponseError::NonFinite {
-            what: "contact point or impulse",
+            what: "contact point, impulse or velocity bias",
         });
     }
     let frame = ContactFrame::from_normal(c.normal)?;
@@ -340,6 +349,7 @@ fn prepare_row(bodies: &[IslandBody], c: &Contact) -> Result<Row, ResponseError>
     }
     let k_t = largest_eigenvalue_2x2(k.x_axis.x, k.y_axis.x, k.y_axis.y);
     Ok(Row {
+        bias: frame.to_contact(c.velocity_bias),
         frame,
         r1,
         r2,

@@ -62,6 +62,7 @@ fn face_contacts(
             normal: DVec3::Z,
             friction: mu,
             target_normal_velocity: 0.0,
+            velocity_bias: DVec3::ZERO,
             impulse: DVec3::ZERO,
         })
         .collect()
@@ -235,6 +236,7 @@ fn random_balls_slide_into_rolling_as_the_closed_form_says() {
             normal: DVec3::Z,
             friction: mu,
             target_normal_velocity: 0.0,
+            velocity_bias: DVec3::ZERO,
             impulse: DVec3::ZERO,
         }];
         let slip = |b: &IslandBody| b.velocity + b.omega.cross(DVec3::new(0.0, 0.0, -r));
@@ -347,6 +349,7 @@ fn random_island(
                 normal: unit(rng),
                 friction: rng.random_range(0.0..1.5),
                 target_normal_velocity: 0.0,
+                velocity_bias: DVec3::ZERO,
                 impulse: DVec3::ZERO,
             }
         })
@@ -518,6 +521,7 @@ fn bad_input_is_refused_and_changes_nothing() {
             vec![b],
             Contact {
                 target_normal_velocity: f64::INFINITY,
+                velocity_bias: DVec3::ZERO,
                 ..good
             },
             tight(),
@@ -668,4 +672,40 @@ fn an_accepted_direct_solve_is_where_the_sweeps_stay() {
     eprintln!("{accepted} accepted; worst relative residual after {worst:e}");
     assert!(accepted >= 100, "{accepted} accepted");
     assert!(worst < 1e-2, "worst relative residual {worst:e}");
+}
+
+/// A velocity bias b moves the contact law to u + b: a box pressed on the floor by one step
+/// of gravity, every corner biased by the same b, ends moving at −b when friction holds it
+/// (its normal speed −b_n, its tangential −b_t), and when friction cannot (μ below
+/// |b_t|/(g·h − b_n)) slides with the tangential speed friction's full disk allows,
+/// μ·(g·h − b_n), against b_t (opposite to the slip u_t + b_t); it does not turn either way.
+#[test]
+fn a_velocity_bias_moves_the_law_to_u_plus_b() {
+    let (m, half) = (2.0, DVec3::new(0.3, 0.2, 0.05));
+    let b = DVec3::new(0.002, -0.001, 0.003);
+    for mu in [0.5, 0.1] {
+        let (mut body, _) = box_body(m, half, DVec3::new(0.0, 0.0, half.z));
+        body.velocity.z = -G * H;
+        let mut bodies = [body];
+        let mut contacts = face_contacts(bodies[0].com, half, 0.0, 0, None, mu);
+        for c in &mut contacts {
+            c.velocity_bias = b;
+        }
+        let report = solve_contacts(&mut bodies, &mut contacts, &tight()).unwrap();
+        assert!(report.converged, "{report:?}");
+        let (v, w) = (bodies[0].velocity, bodies[0].omega);
+        let bt = DVec3::new(b.x, b.y, 0.0);
+        let sticks = bt.length() <= mu * (G * H - b.z);
+        let expected_t = if sticks {
+            -bt
+        } else {
+            -bt.normalize() * mu * (G * H - b.z)
+        };
+        assert!((v.z + b.z).abs() < 1e-10, "μ {mu}: normal speed {}", v.z);
+        assert!(
+            (v.truncate() - expected_t.truncate()).length() < 1e-9,
+            "μ {mu} (sticks: {sticks}): {v} against {expected_t}"
+        );
+        assert!(w.length() < 1e-9, "μ {mu}: turns at {w}");
+    }
 }

@@ -4,6 +4,7 @@
 
 use glam::DVec3;
 use impulse_collide::manifold::{self, ContactPoint, MAX_POINTS, Manifold, ManifoldCache};
+use impulse_collide::shape::Convex;
 use impulse_response::{Contact, ContactFrame, IslandBody, SolverSettings, solve_contacts};
 use rustc_hash::FxHashMap;
 
@@ -32,6 +33,13 @@ const LOCATE_DONE: f64 = 0.999;
 /// step instead of at once, and the validation scenes penetrated (coins 72 ε_c, dish 10 ε_c,
 /// dominos 3.6 ε_c).
 const STRUCK_FRACTION: f64 = 1e-2;
+
+/// A held contact approaching at u_n at the start of an island step of length h is left to
+/// the step's constant load (no impulsive solve) when that load, bringing its speed to the
+/// step's target linearly, lets it close at most this fraction of the rest gap,
+/// |u_n|·h/2 ≤ this·g_r: the turning of a held pair drifts its points' speeds by about
+/// ω²·r·h a step, which is not a strike. Default `0.25`.
+const ABSORB_GAP_FRACTION: f64 = 0.25;
 
 /// After an island's impulsive solve (a strike), its step may let the strike's change of
 /// speed (‖Δv‖ + ‖Δω‖·r, the largest over its bodies) carry a surface this fraction of the
@@ -164,7 +172,7 @@ impl World {
     fn stabilisation_speed(&self, gap: f64) -> f64 {
         let s = &self.islands.settings;
         let eps = self.collision_epsilon();
-        let rest_gap = s.rest_gap_fraction * eps;
+        let rest_gap = self.rest_gap();
         let pull_gap = s.pull_gap_fraction * eps;
         let error = if gap < rest_gap {
             rest_gap - gap
@@ -172,6 +180,11 @@ impl World {
             (pull_gap - gap).min(0.0)
         };
         (s.stabilisation * error + (1.0 - s.stabilisation) * (-gap).max(0.0)) / s.step
+    }
+
+    /// The gap g_r at which a held contact rests.
+    fn rest_gap(&self) -> f64 {
+        self.islands.settings.rest_gap_fraction * self.collision_epsilon()
     }
 
     pub(super) fn is_held(&self, pair: (u32, u32)) -> bool {
@@ -549,6 +562,7 @@ impl World {
             add(self, i, &mut ids, &mut bodies);
         }
         let mut contacts: Vec<Contact> = Vec::new();
+        let mut material: Vec<(bool, bool)> = Vec::new();
         let mut gaps: Vec<f64> = Vec::new();
         let mut origin: Vec<((u32, u32), usize, usize)> = Vec::new();
         for &p in &island.pairs {
@@ -581,6 +595,17 @@ impl World {
                 })
                 .chain(outside.map(|(m, point)| (m, held.manifolds[m].normal, point, None, 0)));
             for (m, normal, point, warm, q) in listed {
+                // Whether each body's side of the contact is a polyhedron's vertex or edge,
+                // a material point that turns with the body (a smooth piece's contact point
+                // is not: a ball turning about its centre keeps its distance).
+                let pieces = held.manifolds[m].pieces;
+                let polyhedral = |i: u32, piece: u32| {
+                    matches!(
+                        self.b(i).shape.pieces()[piece as usize].convex,
+                        Convex::Polyhedron(_)
+                    )
+                };
+                material.push((polyhedral(p.1, pieces.1), polyhedral(p.0, pieces.0)));
                 let m = if warm.is_some() {
                     m
                 } else {
@@ -604,6 +629,7 @@ impl World {
                         normal,
                         friction,
                         target_normal_velocity: 0.0,
+                        velocity_bias: DVec3::ZERO,
                         impulse: self
                             .contact_frame(normal)?
                             .to_contact(warm.unwrap_or_default()),
@@ -634,7 +660,8 @@ impl World {
             .filter(|(_, s)| !**s)
             .map(|(c, _)| normal_speed(&bodies, c))
             .fold(f64::INFINITY, f64::min);
-        if approach < -STRUCK_FRACTION * v_s {
+        let absorbed = 2.0 * ABSORB_GAP_FRACTION * self.rest_gap() / h0;
+        if approach < -(STRUCK_FRACTION * v_s).max(absorbed) {
             let before = bodies.clone();
             let targets = patch_targets(&contacts, &patches, &gaps, |g| {
                 self.stabilisation_speed(g).max(0.0)
@@ -681,17 +708,25 @@ impl World {
             // transition must not push harder.
             let targets =
                 patch_targets(&contacts, &patches, &gaps, |g| self.stabilisation_speed(g));
-            for (c, &target) in contacts.iter_mut().zip(&targets) {
-                c.target_normal_velocity = target;
-            }
+            // The solve measures each body's point velocity with its lever arm at the start
+            // of the step, but the arm turns with the body: at the step's end the point's
+            // velocity is that plus h·ω×(ω×r) ([`lever_turn`]). The law holds for the point's
+            // velocity at the end, or a pivoting edge would climb off its support and a
+            // sliding edge sink into a turning face by ½·h²·n·ω×(ω×r) at every step.
             // A speculative point may close its gap to ε_c within the step and no further:
             // its mean normal speed over the step (the held load is constant, so the speed
-            // changes linearly) must not close more than the gap beyond ε_c.
+            // changes linearly) must not close more than the gap beyond ε_c, widened by what
+            // the turning of its arms moves it.
             for (k, c) in contacts.iter_mut().enumerate() {
+                c.target_normal_velocity = targets[k];
+                let turn = lever_turn(&after_jolt, c, material[k], h);
                 if speculative[k] {
-                    let beyond = raw_gaps[k] - eps;
+                    c.velocity_bias = DVec3::ZERO;
+                    let beyond = raw_gaps[k] - eps + 0.5 * h * turn.dot(c.normal.normalize());
                     let start = normal_speed(&after_jolt, c);
                     c.target_normal_velocity = (-beyond / h).max(-2.0 * beyond / h - start);
+                } else {
+                    c.velocity_bias = turn;
                 }
             }
             let mut trial = contacts.clone();
@@ -836,6 +871,25 @@ impl World {
 /// Relative normal speed of a contact (positive apart).
 fn normal_speed(bodies: &[IslandBody], c: &Contact) -> f64 {
     relative_velocity(bodies, c).dot(c.normal.normalize())
+}
+
+/// What the turning of a contact's lever arms over a step of length `h` adds to body 1's
+/// point velocity relative to body 2's at the step's end, h·(ω₁×(ω₁×r₁) − ω₂×(ω₂×r₂)), for
+/// each body whose side of the contact is a material point (`turns`: body 1's, body 2's; a
+/// smooth piece's contact point is not one: a ball turning about its centre keeps its
+/// distance). Over the step it moves the points apart by half of it times h.
+fn lever_turn(bodies: &[IslandBody], c: &Contact, turns: (bool, bool), h: f64) -> DVec3 {
+    let inward = |b: &IslandBody| b.omega.cross(b.omega.cross(c.point - b.com));
+    let a1 = if turns.0 {
+        inward(&bodies[c.body1])
+    } else {
+        DVec3::ZERO
+    };
+    let a2 = match c.body2 {
+        Some(k) if turns.1 => inward(&bodies[k]),
+        _ => DVec3::ZERO,
+    };
+    h * (a1 - a2)
 }
 
 /// Relative tangential speed of a contact.

@@ -167,6 +167,7 @@ mod tests {
             normal: DVec3::Z,
             friction: 0.5,
             target_normal_velocity: 0.0,
+            velocity_bias: DVec3::ZERO,
             impulse: DVec3::ZERO,
         }
     }
