@@ -46,6 +46,7 @@ fn stack(n: usize) -> (Vec<IslandBody>, Vec<Contact>) {
                 friction: 0.6,
                 target_normal_velocity: 0.0,
                 velocity_bias: DVec3::ZERO,
+                lever_arms: None,
                 impulse: DVec3::ZERO,
             });
         }

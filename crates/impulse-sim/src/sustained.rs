@@ -30,10 +30,12 @@
 //!   every body is ballistic under gravity, its loads and its held contact load — the motion
 //!   model the event loop's time-of-impact bounds already cover. Velocities stay continuous;
 //!   a sliding body's motion under constant friction is exact, and a ball rolls without hops.
-//!   The contact law holds for each point's velocity at the step's end: a polyhedron's
-//!   contact vertex or edge turns with its body, which adds h·ω×(ω×r) to the velocity its
-//!   lever arm at the start gives (`impulse_response::Contact::velocity_bias`); left out, a
-//!   pivoting edge climbs off its support by ½·h²·ω²·r a step.
+//!   A polyhedron's contact vertex or edge turns with its body over the step: the held
+//!   load acts at its lever arm at mid-step, whose torque is the step's mean to second order
+//!   (`impulse_response::Contact::lever_arms`; with the arm at the start a box tipping over
+//!   its edge came late by 1.5·‖ω‖·h relative), and the contact law holds for the point's
+//!   velocity at the step's end (`impulse_response::Contact::velocity_bias`; left out, a
+//!   pivoting edge climbs off its support by ½·h²·ω²·r a step).
 //!   Full steps end on the grid of multiples of `h` in absolute time, so islands step at
 //!   the same instants and share the event loop's steps (each of which advances every body).
 //! - **Position stabilisation**: a held contact rests at the gap g_r = `rest_gap_fraction`·ε_c

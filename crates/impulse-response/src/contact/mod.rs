@@ -89,6 +89,11 @@ pub struct Contact {
     /// slip u + this. Zero for the plain law; a stepper whose contact velocities are measured
     /// with lever arms that turn over its step passes the change those arms miss.
     pub velocity_bias: DVec3,
+    /// The lever arms (world) from body 1's and body 2's centres of mass to where the
+    /// impulse acts on each; `None`: `point` less each centre. A stepper that holds the
+    /// impulse as a constant load over its step passes the arms at the middle of the step,
+    /// about which the load's torque is the step's mean to second order.
+    pub lever_arms: Option<(DVec3, DVec3)>,
     /// Accumulated impulse (p_t1, p_t2, p_n) in the contact frame
     /// ([`ContactFrame::from_normal`] of `normal`): the warm start on entry, the solution on
     /// return.
@@ -336,9 +341,16 @@ fn prepare_row(bodies: &[IslandBody], c: &Contact) -> Result<Row, ResponseError>
         });
     }
     let frame = ContactFrame::from_normal(c.normal)?;
-    let r1 = c.point - b1.com;
+    if c.lever_arms
+        .is_some_and(|(a1, a2)| !(a1.is_finite() && a2.is_finite()))
+    {
+        return Err(ResponseError::NonFinite {
+            what: "contact lever arms",
+        });
+    }
+    let r1 = c.lever_arms.map_or(c.point - b1.com, |(a1, _)| a1);
     let (body2, r2) = match b2 {
-        Some(b) => (b.body, c.point - b.com),
+        Some(b) => (b.body, c.lever_arms.map_or(c.point - b.com, |(_, a2)| a2)),
         None => (Body::Fixed, DVec3::ZERO),
     };
     let k = frame.matrix_to_contact(collision_matrix_world(&b1.body, r1, &body2, r2));

@@ -63,6 +63,7 @@ fn face_contacts(
             friction: mu,
             target_normal_velocity: 0.0,
             velocity_bias: DVec3::ZERO,
+            lever_arms: None,
             impulse: DVec3::ZERO,
         })
         .collect()
@@ -237,6 +238,7 @@ fn random_balls_slide_into_rolling_as_the_closed_form_says() {
             friction: mu,
             target_normal_velocity: 0.0,
             velocity_bias: DVec3::ZERO,
+            lever_arms: None,
             impulse: DVec3::ZERO,
         }];
         let slip = |b: &IslandBody| b.velocity + b.omega.cross(DVec3::new(0.0, 0.0, -r));
@@ -350,6 +352,7 @@ fn random_island(
                 friction: rng.random_range(0.0..1.5),
                 target_normal_velocity: 0.0,
                 velocity_bias: DVec3::ZERO,
+                lever_arms: None,
                 impulse: DVec3::ZERO,
             }
         })
@@ -522,6 +525,7 @@ fn bad_input_is_refused_and_changes_nothing() {
             Contact {
                 target_normal_velocity: f64::INFINITY,
                 velocity_bias: DVec3::ZERO,
+                lever_arms: None,
                 ..good
             },
             tight(),
@@ -708,4 +712,45 @@ fn a_velocity_bias_moves_the_law_to_u_plus_b() {
         );
         assert!(w.length() < 1e-9, "μ {mu}: turns at {w}");
     }
+}
+
+/// Explicit lever arms replace `point − com`: a box moving down and sideways meets the floor
+/// at one corner whose impulse is declared to act at another arm r. The solution stops the
+/// velocity of the point at r (v + ω×r = 0, friction holds), and the box's momentum and
+/// angular momentum about its centre change by P and r × P, read from its velocities.
+#[test]
+fn explicit_lever_arms_are_where_the_impulse_acts() {
+    let (m, half) = (2.0, DVec3::new(0.3, 0.2, 0.1));
+    let (mut body, inertia) = box_body(m, half, DVec3::new(0.0, 0.0, half.z));
+    body.velocity = DVec3::new(0.05, -0.02, -0.3);
+    let v0 = body.velocity;
+    let mut bodies = [body];
+    let arm = DVec3::new(0.25, -0.15, -0.12);
+    let mut contacts = vec![Contact {
+        body1: 0,
+        body2: None,
+        point: DVec3::new(half.x, half.y, 0.0),
+        normal: DVec3::Z,
+        friction: 10.0,
+        target_normal_velocity: 0.0,
+        velocity_bias: DVec3::ZERO,
+        lever_arms: Some((arm, DVec3::ZERO)),
+        impulse: DVec3::ZERO,
+    }];
+    let report = solve_contacts(&mut bodies, &mut contacts, &tight()).unwrap();
+    assert!(report.converged, "{report:?}");
+    let (v, w) = (bodies[0].velocity, bodies[0].omega);
+    let at_arm = v + w.cross(arm);
+    assert!(
+        at_arm.length() < 1e-10,
+        "the point at the arm moves at {at_arm}"
+    );
+    let p = m * (v - v0);
+    let dl = inertia * w;
+    assert!(
+        (dl - arm.cross(p)).length() < 1e-10,
+        "ΔL {dl} against r × P {}",
+        arm.cross(p)
+    );
+    assert!(p.z > 0.0, "the floor pushes up: {p}");
 }

@@ -168,6 +168,7 @@ mod tests {
             friction: 0.5,
             target_normal_velocity: 0.0,
             velocity_bias: DVec3::ZERO,
+            lever_arms: None,
             impulse: DVec3::ZERO,
         }
     }
