@@ -64,6 +64,10 @@
 //!   chapter-3 collision from the event loop.
 //! - **Lift-off**: a held pair whose manifold is gone (no point within ε_c) is released to the
 //!   event loop, which bounds its next approach as it bounds any pair.
+//! - **Rest steps**: an island whose bodies all move slower than the sleep speed, under no
+//!   load function and touching only fixed bodies, with every gap in or above the rest band,
+//!   steps eight nominal steps at a time (a strike, a program's change or a new held pair
+//!   still makes it step at once).
 //! - **Sleeping**: an island whose bodies all move slower than the sleep speed for
 //!   [`SustainedSettings::sleep_time`] sleeps: velocities and held loads are zeroed and its
 //!   bodies are fixed until something touches them, the program changes them, or an awake

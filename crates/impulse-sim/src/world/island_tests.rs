@@ -370,7 +370,7 @@ const DROP_GAP: f64 = 1.5;
 /// contact envelope, at the top of the rest band) are in sustained contact from the start:
 /// their pairs are held where they were put, so no block moves by more than [`BAND_STILL`] of
 /// ε_c, the stack sleeps within [`BAND_SLEEP_MARGIN`] of the sleep time, and the independent
-/// monitor sees no penetration. When such pairs waited for the event loop to bring them to
+/// monitor sees no penetration; at rest, its island takes long steps. When such pairs waited for the event loop to bring them to
 /// the top of the heap (their time-of-impact bound to a closer gap), the blocks fell together
 /// and landed one after another as collisions: the top block came down by several ε_c.
 #[test]
@@ -404,9 +404,10 @@ fn a_stack_placed_inside_the_envelope_is_held_where_it_was_put() {
         .collect();
     let settings = SustainedSettings::default();
     let (mut t, mut moved, mut asleep_at) = (0.0, 0.0_f64, None);
+    let mut island_steps = 0;
     while t < settings.sleep_time + 2.0 * BAND_SLEEP_MARGIN {
         t += SAMPLE;
-        world.step_until(t).expect("runs");
+        island_steps += world.step_until(t).expect("runs").counters.island_steps;
         for (&h, s) in handles.iter().zip(&start) {
             moved = moved.max((world.state(h).expect("live").position - *s).length());
         }
@@ -430,6 +431,12 @@ fn a_stack_placed_inside_the_envelope_is_held_where_it_was_put() {
         "asleep at {asleep_at} s"
     );
     assert!(depth <= eps, "penetration {depth}");
+    // At rest it steps REST_STEP_MULTIPLE times less often (a step per nominal step: 500).
+    let rest_steps = asleep_at / (super::island::REST_STEP_MULTIPLE * settings.step);
+    assert!(
+        island_steps as f64 <= 1.25 * rest_steps + 4.0,
+        "{island_steps} island steps before it slept at {asleep_at} s"
+    );
 }
 
 /// A plank laid across two blocks (a closed loop of contacts: floor, block, plank, block,
