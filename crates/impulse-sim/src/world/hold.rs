@@ -165,7 +165,12 @@ impl World {
         let turn = turn_along(Some(found[0].normal));
         if turn <= margin * self.rotation_limit() {
             let step = self.rotation_step(turn);
-            if step < s.step {
+            // Not for a compound: its clearance is bounded by its pieces' bounding spheres
+            // and its turn speed by its whole sliding speed, so the fast way seldom steps
+            // longer and costs a manifold at the reach and the outside points (balls rolling
+            // in the dish: 2.09 s with the attempt, 1.27 s without).
+            let compound = ba.reach.len() > 1 || bb.reach.len() > 1;
+            if step < s.step && !compound {
                 let fast = self.fast_contact((a, b), &found, turn_along(None), margin, cache)?;
                 if let Some(fast) = fast {
                     if fast.step() > step {

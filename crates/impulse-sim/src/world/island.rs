@@ -3,6 +3,7 @@
 //! waking.
 
 use glam::{DQuat, DVec3};
+use impulse_collide::feature::Feature;
 use impulse_collide::manifold::{self, ContactPoint, MAX_POINTS, Manifold, ManifoldCache};
 use impulse_collide::shape::Convex;
 use impulse_response::{Contact, ContactFrame, IslandBody, SolverSettings, solve_contacts};
@@ -641,17 +642,23 @@ impl World {
                 })
                 .chain(outside.map(|(m, point)| (m, held.manifolds[m].normal, point, None, 0)));
             for (m, normal, point, warm, q) in listed {
-                // Whether each body's side of the contact is a polyhedron's vertex or edge,
-                // a material point that turns with the body (a smooth piece's contact point
-                // is not: a ball turning about its centre keeps its distance).
+                // Whether each body's side of the point is a polyhedron's vertex, a material
+                // point that turns with the body. A face's side is not (the point moves over
+                // the face with the other body's vertex: a ball rolling on a turning platter),
+                // nor is an edge crossing (it slides along both edges), nor a smooth piece's
+                // support point (a ball turning about its centre keeps its distance).
                 let pieces = held.manifolds[m].pieces;
-                let polyhedral = |i: u32, piece: u32| {
-                    matches!(
-                        self.b(i).shape.pieces()[piece as usize].convex,
-                        Convex::Polyhedron(_)
-                    )
+                let vertex = |i: u32, piece: u32, feature: Feature| {
+                    matches!(feature, Feature::Vertex(_))
+                        && matches!(
+                            self.b(i).shape.pieces()[piece as usize].convex,
+                            Convex::Polyhedron(_)
+                        )
                 };
-                material.push((polyhedral(p.1, pieces.1), polyhedral(p.0, pieces.0)));
+                material.push((
+                    vertex(p.1, pieces.1, point.id.b),
+                    vertex(p.0, pieces.0, point.id.a),
+                ));
                 let m = if warm.is_some() {
                     m
                 } else {
