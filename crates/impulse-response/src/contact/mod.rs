@@ -143,6 +143,8 @@ pub struct SolveReport {
     pub converged: bool,
     /// Whether a direct solve on the active set was taken ([`SolverSettings::direct_after`]).
     pub direct: bool,
+    /// Whether a direct solve was tried (taken or not).
+    pub direct_tried: bool,
 }
 
 /// A contact's precomputed geometry: frame, offsets, collision matrix.
@@ -188,6 +190,7 @@ pub fn solve_contacts(
         residual: f64::INFINITY,
         converged: contacts.is_empty(),
         direct: false,
+        direct_tried: false,
     };
     while !report.converged && report.iterations < settings.max_iterations {
         let mut residual = 0.0_f64;
@@ -198,6 +201,7 @@ pub fn solve_contacts(
         report.residual = residual;
         report.converged = residual <= settings.tolerance;
         if !report.converged && settings.direct_after == Some(report.iterations) {
+            report.direct_tried = true;
             report.direct = direct::solve_active_set(bodies, contacts, &rows, settings.tolerance);
         }
     }

@@ -601,7 +601,10 @@ fn direct_solve_settles_tall_stacks() {
             b.velocity.z -= G * H;
         }
         let report = solve_contacts(&mut bodies, &mut contacts, &settings).unwrap();
-        assert!(report.converged && report.direct, "n = {n}: {report:?}");
+        assert!(
+            report.converged && report.direct && report.direct_tried,
+            "n = {n}: {report:?}"
+        );
         for (k, b) in bodies.iter().enumerate() {
             assert!(
                 b.velocity.length() < 1e-7,
@@ -620,7 +623,10 @@ fn direct_solve_settles_tall_stacks() {
             b.velocity.z -= G * H;
         }
         let warm = solve_contacts(&mut bodies, &mut contacts, &settings).unwrap();
-        assert!(warm.converged && warm.iterations == 1, "n {n}: {warm:?}");
+        assert!(
+            warm.converged && warm.iterations == 1 && !warm.direct_tried,
+            "n {n}: {warm:?}"
+        );
         let plain = SolverSettings {
             direct_after: None,
             ..settings
@@ -642,7 +648,7 @@ fn direct_solve_settles_tall_stacks() {
             .collect();
         let sweeps = solve_contacts(&mut still, &mut cold, &plain).unwrap();
         assert!(
-            !sweeps.converged,
+            !sweeps.converged && !sweeps.direct_tried,
             "n {n}: sweeps alone converged: {sweeps:?}"
         );
     }
