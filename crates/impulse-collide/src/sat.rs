@@ -123,6 +123,7 @@ impl Arc {
 mod tests {
     use super::*;
     use crate::brute;
+    use crate::manifold::tests::random_hull;
     use crate::motion::testkit::{random_rotation, rng, unit_vector};
     use glam::DQuat;
     use impulse_geom::primitives;
@@ -130,24 +131,6 @@ mod tests {
 
     /// Agreement with the brute search (m; coordinates of order 1).
     const AGREE_TOL: f64 = 1e-12;
-
-    /// A random convex hull of 6–30 points, 0.2–2 across.
-    fn random_hull(r: &mut rand::rngs::Xoshiro256PlusPlus) -> ConvexPolyhedron {
-        let scale = DVec3::new(
-            r.random_range(0.1..1.0),
-            r.random_range(0.1..1.0),
-            r.random_range(0.1..1.0),
-        );
-        loop {
-            let count = r.random_range(6..=30);
-            let pts: Vec<DVec3> = (0..count)
-                .map(|_| unit_vector(r) * r.random_range(0.3..1.0) * scale)
-                .collect();
-            if let Ok(p) = ConvexPolyhedron::hull(&pts) {
-                return p;
-            }
-        }
-    }
 
     /// Random hulls at random poses, from deep overlap to apart: where the brute search finds
     /// them touching or overlapping, the same separation to rounding, along an axis that

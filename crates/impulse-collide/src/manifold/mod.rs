@@ -72,7 +72,7 @@ mod clip;
 pub mod coherence;
 mod reduce;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use clearance::{Outside, convex_outside, shape_outside};
 pub use coherence::match_points;

@@ -129,7 +129,7 @@ fn snap_of(a: &Convex, b: &Convex) -> f64 {
 }
 
 /// A random convex hull of 6–20 points, 0.2–2 across.
-fn random_hull(r: &mut rand::rngs::Xoshiro256PlusPlus) -> ConvexPolyhedron {
+pub(crate) fn random_hull(r: &mut rand::rngs::Xoshiro256PlusPlus) -> ConvexPolyhedron {
     let scale = DVec3::new(
         r.random_range(0.1..1.0),
         r.random_range(0.1..1.0),
