@@ -153,45 +153,80 @@ impl World {
                 turn_speed(ba, bb, n)
             }
         };
+        // The fast way is tried only for single polyhedra, whose turning brings vertices
+        // within reach. A compound's clearance is bounded by its pieces' bounding spheres and
+        // its turn speed by its whole sliding speed, and a smooth piece has no vertex to
+        // hold: the fast way seldom steps longer there and costs a manifold at the reach and
+        // the outside points (balls rolling in the dish: 2.09 s with the attempt, 1.27 s
+        // without; the rattleback 5.6 s against 3.9).
+        let polyhedron = |x: &crate::body::Body| matches!(x.shape.pieces(), [piece] if matches!(piece.convex, Convex::Polyhedron(_)));
+        let turn0 = turn_along(None);
+        if polyhedron(ba) && polyhedron(bb) && self.rotation_step(turn0) < s.step {
+            return self.turning_polyhedra((a, b), turn0, &turn_along, margin, cache);
+        }
         // Lift-off: no point within the envelope.
         let found = self.pair_manifolds((a, b), eps, cache)?;
         if found.iter().all(|m| m.min_gap() > eps) {
             return Ok(PairContact::Apart);
         }
-        // Slow: no other feature can come through the envelope within the shortest step. A
-        // turning pair is held the fast way instead when that allows a longer step: its
-        // speculative and outside points cover what the turning brings within reach, so its
-        // step is bounded by the curvature and the clearance, not by the envelope (a domino
-        // tipping at 0.15 m/s would step every 60 µs the slow way, every 1 ms the fast way).
+        // Slow: no other feature can come through the envelope within the shortest step.
         let turn = turn_along(Some(found[0].normal));
         if turn <= margin * self.rotation_limit() {
-            let step = self.rotation_step(turn);
-            // Only for single polyhedra, whose turning brings vertices within reach. A
-            // compound's clearance is bounded by its pieces' bounding spheres and its turn
-            // speed by its whole sliding speed, and a smooth piece has no vertex to hold: the
-            // fast way seldom steps longer there and costs a manifold at the reach and the
-            // outside points (balls rolling in the dish: 2.09 s with the attempt, 1.27 s
-            // without; the rattleback 5.6 s against 3.9).
-            let polyhedron = |x: &crate::body::Body| matches!(x.shape.pieces(), [piece] if matches!(piece.convex, Convex::Polyhedron(_)));
-            if step < s.step && polyhedron(ba) && polyhedron(bb) {
-                let fast = self.fast_contact((a, b), &found, turn_along(None), margin, cache)?;
-                if let Some(fast) = fast {
-                    if fast.step() > step {
-                        return Ok(fast);
-                    }
-                }
-            }
             let outside = vec![Vec::new(); found.len()];
             return Ok(PairContact::Held {
                 manifolds: found,
                 outside,
-                step,
+                step: self.rotation_step(turn),
                 fast: false,
             });
         }
         Ok(self
-            .fast_contact((a, b), &found, turn_along(None), margin, cache)?
+            .fast_contact((a, b), &found, None, turn0, margin, cache)?
             .unwrap_or(PairContact::TooFast))
+    }
+
+    /// [`Self::pair_contact`] for two single polyhedra that may be turning (`turn0`, the turn
+    /// speed without a normal, asks for less than the nominal step): held the fast way
+    /// whenever that allows a longer step than the slow way — its speculative and outside
+    /// points cover what the turning brings within reach, so its step is bounded by the
+    /// curvature and the clearance, not by the envelope (a domino tipping at 0.15 m/s steps
+    /// every 60 µs the slow way, every 1 ms the fast way). The manifold at the reach comes
+    /// first, and serves for lift-off and the normal too; the one within ε_c is computed only
+    /// when the slow way is taken.
+    fn turning_polyhedra(
+        &self,
+        (a, b): (u32, u32),
+        turn0: f64,
+        turn_along: &dyn Fn(Option<DVec3>) -> f64,
+        margin: f64,
+        cache: &mut ManifoldCache,
+    ) -> Result<PairContact, SimError> {
+        let eps = self.collision_epsilon();
+        let wide = self.pair_manifolds((a, b), eps + self.speculative_margin(turn0), cache)?;
+        // Lift-off: no point within the envelope (a manifold keeps its deepest point).
+        if wide.iter().all(|m| m.min_gap() > eps) {
+            return Ok(PairContact::Apart);
+        }
+        let turn = turn_along(Some(wide[0].normal));
+        let slow = (turn <= margin * self.rotation_limit()).then(|| self.rotation_step(turn));
+        let fast = self.fast_contact((a, b), &wide, Some(&wide), turn0, margin, cache)?;
+        let step = match (slow, fast) {
+            (Some(step), Some(fast)) if fast.step() <= step => step,
+            (_, Some(fast)) => return Ok(fast),
+            (None, None) => return Ok(PairContact::TooFast),
+            (Some(step), None) => step,
+        };
+        let found = self.pair_manifolds((a, b), eps, cache)?;
+        if found.iter().all(|m| m.min_gap() > eps) {
+            return Ok(PairContact::Apart);
+        }
+        let outside = vec![Vec::new(); found.len()];
+        Ok(PairContact::Held {
+            manifolds: found,
+            outside,
+            step,
+            fast: false,
+        })
     }
 
     /// The manifolds of a pair's pieces within `tolerance`.
@@ -213,12 +248,15 @@ impl World {
 
     /// A pair held the fast way ([`Self::pair_contact`]: speculative and outside points, a
     /// step the curvature and the clearance allow), or `None` when it is too fast for that.
-    /// `found`: its manifolds within ε_c; `turn`: how fast another feature can approach
-    /// ([`turn_speed`] without a normal, or [`rotation_speed`] for a struck pair).
+    /// `found`: its manifolds within ε_c (or any wider: only their points within ε_c count
+    /// here); `wide`: its manifolds at the reach `turn` gives, when already computed; `turn`:
+    /// how fast another feature can approach ([`turn_speed`] without a normal, or
+    /// [`rotation_speed`] for a struck pair).
     fn fast_contact(
         &self,
         (a, b): (u32, u32),
         found: &[Manifold],
+        wide: Option<&[Manifold]>,
         turn: f64,
         margin: f64,
         cache: &mut ManifoldCache,
@@ -248,7 +286,10 @@ impl World {
             return Ok(None);
         }
         let reach = eps + self.speculative_margin(turn);
-        let found = self.pair_manifolds((a, b), reach, cache)?;
+        let found = match wide {
+            Some(w) => w.to_vec(),
+            None => self.pair_manifolds((a, b), reach, cache)?,
+        };
         let (outside, clearance) =
             manifold::shape_outside(&ba.shape, &ba.pose, &bb.shape, &bb.pose, &found, reach);
         let step = self
