@@ -50,7 +50,7 @@ pub fn segment_segment(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (f64, f64,
 }
 
 /// Vertices of `poly` placed at `pose`.
-fn world_vertices(poly: &ConvexPolyhedron, pose: &Pose) -> Vec<DVec3> {
+pub(crate) fn world_vertices(poly: &ConvexPolyhedron, pose: &Pose) -> Vec<DVec3> {
     poly.vertices()
         .iter()
         .map(|&v| pose.transform_point(v))
@@ -59,6 +59,12 @@ fn world_vertices(poly: &ConvexPolyhedron, pose: &Pose) -> Vec<DVec3> {
 
 /// Gap between the projections of two point sets on `axis` (negative when they overlap).
 fn gap_along(va: &[DVec3], vb: &[DVec3], axis: DVec3) -> f64 {
+    axis_gap(va, vb, axis).0
+}
+
+/// How two point sets lie along `axis`: the larger of `b` beyond `a` (lb − ha) and `a` beyond
+/// `b` (la − hb), with the unit normal from `b` toward `a` that goes with it (−axis, axis).
+pub(crate) fn axis_gap(va: &[DVec3], vb: &[DVec3], axis: DVec3) -> (f64, DVec3) {
     let span = |vs: &[DVec3]| {
         vs.iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
@@ -67,7 +73,11 @@ fn gap_along(va: &[DVec3], vb: &[DVec3], axis: DVec3) -> f64 {
             })
     };
     let ((la, ha), (lb, hb)) = (span(va), span(vb));
-    (lb - ha).max(la - hb)
+    if lb - ha >= la - hb {
+        (lb - ha, -axis)
+    } else {
+        (la - hb, axis)
+    }
 }
 
 /// Every candidate separating axis of two placed polyhedra: face normals of both, and the
@@ -126,22 +136,9 @@ pub fn sat_axis(
     pose_b: &Pose,
 ) -> (f64, DVec3) {
     let (va, vb) = (world_vertices(a, pose_a), world_vertices(b, pose_b));
-    let span = |vs: &[DVec3], axis: DVec3| {
-        vs.iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                let x = v.dot(axis);
-                (lo.min(x), hi.max(x))
-            })
-    };
     let mut best = (f64::NEG_INFINITY, DVec3::Z);
     for axis in sat_axes(a, pose_a, b, pose_b, &va, &vb) {
-        let ((la, ha), (lb, hb)) = (span(&va, axis), span(&vb, axis));
-        // b beyond a along the axis (lb − ha), or a beyond b (la − hb).
-        let (gap, normal) = if lb - ha >= la - hb {
-            (lb - ha, -axis)
-        } else {
-            (la - hb, axis)
-        };
+        let (gap, normal) = axis_gap(&va, &vb, axis);
         if gap > best.0 {
             best = (gap, normal);
         }

@@ -12,6 +12,10 @@
 //! "The separating axis test between convex polyhedra", GDC 2013). A crossing test costs four
 //! dot products; only the few pairs that pass are projected.
 //!
+//! Each candidate axis is measured as the brute search measures it
+//! (`brute::axis_gap`), so the two differ only in the axes they try: the pruning is
+//! what their comparison tests.
+//!
 //! So for touching or overlapping polyhedra [`polyhedra_axis`] returns the brute search's
 //! separation and, but for ties between axes that attain it, its axis; for separated ones the
 //! separation is a lower bound of the distance, at most the brute search's (both are; neither is
@@ -19,6 +23,8 @@
 
 use glam::DVec3;
 use impulse_geom::{ConvexPolyhedron, Pose};
+
+use crate::brute::{axis_gap, world_vertices};
 
 /// The separating-axis measure with its axis, as [`crate::brute::sat_axis`]: `(separation,
 /// normal)`, `separation` the largest gap between the projections over the candidate axes (≤ 0:
@@ -32,35 +38,17 @@ pub fn polyhedra_axis(
     b: &ConvexPolyhedron,
     pose_b: &Pose,
 ) -> (f64, DVec3) {
-    let placed = |p: &ConvexPolyhedron, pose: &Pose| -> (Vec<DVec3>, Vec<DVec3>) {
-        (
-            p.vertices()
-                .iter()
-                .map(|&v| pose.transform_point(v))
-                .collect(),
-            p.planes()
-                .iter()
-                .map(|pl| pose.transform_vector(pl.normal))
-                .collect(),
-        )
+    let (va, vb) = (world_vertices(a, pose_a), world_vertices(b, pose_b));
+    let normals = |p: &ConvexPolyhedron, pose: &Pose| -> Vec<DVec3> {
+        p.planes()
+            .iter()
+            .map(|pl| pose.transform_vector(pl.normal))
+            .collect()
     };
-    let ((va, na), (vb, nb)) = (placed(a, pose_a), placed(b, pose_b));
-    let span = |vs: &[DVec3], axis: DVec3| {
-        vs.iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                let x = v.dot(axis);
-                (lo.min(x), hi.max(x))
-            })
-    };
+    let (na, nb) = (normals(a, pose_a), normals(b, pose_b));
     let mut best = (f64::NEG_INFINITY, DVec3::Z);
     let mut consider = |axis: DVec3| {
-        let ((la, ha), (lb, hb)) = (span(&va, axis), span(&vb, axis));
-        // b beyond a along the axis (lb − ha), or a beyond b (la − hb).
-        let (gap, normal) = if lb - ha >= la - hb {
-            (lb - ha, -axis)
-        } else {
-            (la - hb, axis)
-        };
+        let (gap, normal) = axis_gap(&va, &vb, axis);
         if gap > best.0 {
             best = (gap, normal);
         }

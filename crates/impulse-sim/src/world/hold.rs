@@ -146,23 +146,21 @@ impl World {
         let (ba, bb) = (self.b(a), self.b(b));
         let s = &self.islands.settings;
         let eps = self.collision_epsilon();
-        let turn_along = |n: Option<DVec3>| {
-            if struck {
-                rotation_speed(ba, bb)
-            } else {
-                turn_speed(ba, bb, n)
-            }
-        };
         // The fast way is tried only for single polyhedra, whose turning brings vertices
         // within reach. A compound's clearance is bounded by its pieces' bounding spheres and
         // its turn speed by its whole sliding speed, and a smooth piece has no vertex to
         // hold: the fast way seldom steps longer there and costs a manifold at the reach and
         // the outside points (balls rolling in the dish: 2.09 s with the attempt, 1.27 s
         // without; the rattleback 5.6 s against 3.9).
-        let polyhedron = |x: &crate::body::Body| matches!(x.shape.pieces(), [piece] if matches!(piece.convex, Convex::Polyhedron(_)));
-        let turn0 = turn_along(None);
+        let polyhedron = |x: &crate::body::Body| {
+            matches!(
+                x.shape.pieces(),
+                [piece] if matches!(piece.convex, Convex::Polyhedron(_))
+            )
+        };
+        let turn0 = pair_turn(ba, bb, struck, None);
         if polyhedron(ba) && polyhedron(bb) && self.rotation_step(turn0) < s.step {
-            return self.turning_polyhedra((a, b), turn0, &turn_along, margin, cache);
+            return self.turning_polyhedra((a, b), struck, turn0, margin, cache);
         }
         // Lift-off: no point within the envelope.
         let found = self.pair_manifolds((a, b), eps, cache)?;
@@ -170,7 +168,7 @@ impl World {
             return Ok(PairContact::Apart);
         }
         // Slow: no other feature can come through the envelope within the shortest step.
-        let turn = turn_along(Some(found[0].normal));
+        let turn = pair_turn(ba, bb, struck, Some(found[0].normal));
         if turn <= margin * self.rotation_limit() {
             let outside = vec![Vec::new(); found.len()];
             return Ok(PairContact::Held {
@@ -196,8 +194,8 @@ impl World {
     fn turning_polyhedra(
         &self,
         (a, b): (u32, u32),
+        struck: bool,
         turn0: f64,
-        turn_along: &dyn Fn(Option<DVec3>) -> f64,
         margin: f64,
         cache: &mut ManifoldCache,
     ) -> Result<PairContact, SimError> {
@@ -207,7 +205,7 @@ impl World {
         if wide.iter().all(|m| m.min_gap() > eps) {
             return Ok(PairContact::Apart);
         }
-        let turn = turn_along(Some(wide[0].normal));
+        let turn = pair_turn(self.b(a), self.b(b), struck, Some(wide[0].normal));
         let slow = (turn <= margin * self.rotation_limit()).then(|| self.rotation_step(turn));
         let fast = self.fast_contact((a, b), &wide, Some(&wide), turn0, margin, cache)?;
         let step = match (slow, fast) {
@@ -337,6 +335,17 @@ pub(super) fn spin_accel(a: &crate::body::Body, b: &crate::body::Body) -> f64 {
 /// (zero for a ball turning about its centre, which keeps its distance to everything).
 pub(super) fn rotation_speed(a: &crate::body::Body, b: &crate::body::Body) -> f64 {
     spin_power(a, 1) + spin_power(b, 1)
+}
+
+/// The turn speed a held pair is judged by: [`rotation_speed`] alone for a pair struck at
+/// this instant (its approach is the strike the island is about to stop), else
+/// [`turn_speed`] along the contact normal `n` (when known).
+fn pair_turn(a: &crate::body::Body, b: &crate::body::Body, struck: bool, n: Option<DVec3>) -> f64 {
+    if struck {
+        rotation_speed(a, b)
+    } else {
+        turn_speed(a, b, n)
+    }
 }
 
 /// How fast another feature of a held pair can approach: its bodies' rotation

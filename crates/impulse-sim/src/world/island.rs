@@ -169,16 +169,22 @@ impl World {
     /// Whether an island is at rest ([`REST_STEP_MULTIPLE`]): its bodies slower than the sleep
     /// speed, none under a load function, and every other body of its pairs fixed.
     fn at_rest(&self, island: &Island) -> bool {
+        island.bodies.iter().all(|&i| self.is_still(i))
+            && island.pairs.iter().all(|&(a, b)| {
+                [a, b].iter().all(|&i| {
+                    self.b(i).is_dynamic() || self.b(i).kind == crate::body::BodyKind::Fixed
+                })
+            })
+    }
+
+    /// Whether body `i` moves slower than the sleep speed (its points: ‖v‖ + ‖ω‖·r_max) under
+    /// no load function: what resting ([`Self::at_rest`]) and sleeping
+    /// ([`Self::sleep_if_still`]) ask of each body.
+    fn is_still(&self, i: u32) -> bool {
         let v_sleep = self.islands.settings.sleep_speed_factor * self.micro_speed();
-        island.bodies.iter().all(|&i| {
-            let b = self.b(i);
-            b.velocity.length() + b.omega.length() * b.r_max < v_sleep
-                && !self.loads.iter().any(|l| l.body == i)
-        }) && island.pairs.iter().all(|&(a, b)| {
-            [a, b]
-                .iter()
-                .all(|&i| self.b(i).is_dynamic() || self.b(i).kind == crate::body::BodyKind::Fixed)
-        })
+        let b = self.b(i);
+        b.velocity.length() + b.omega.length() * b.r_max < v_sleep
+            && !self.loads.iter().any(|l| l.body == i)
     }
 
     /// The step of an island at rest: to the next multiple of [`REST_STEP_MULTIPLE`] nominal
@@ -686,32 +692,30 @@ impl World {
                     lone += 1;
                     usize::MAX - lone
                 };
-                {
-                    // Against a fixed or scripted body the contact acts at the moving body's
-                    // surface (its lever arm exact, whatever the gap); between two moving
-                    // bodies, midway.
-                    let at = match (dyn_a, dyn_b) {
-                        (true, false) => point.point_a,
-                        (false, true) => point.point_b,
-                        _ => point.midpoint(),
-                    };
-                    // The manifold's normal points from a to b: body 1 is b, body 2 is a.
-                    contacts.push(Contact {
-                        body1: kb,
-                        body2: Some(ka),
-                        point: at,
-                        normal,
-                        friction,
-                        target_normal_velocity: 0.0,
-                        velocity_bias: DVec3::ZERO,
-                        lever_arms: None,
-                        impulse: self
-                            .contact_frame(normal)?
-                            .to_contact(warm.unwrap_or_default()),
-                    });
-                    gaps.push(point.gap);
-                    origin.push((p, m, q));
-                }
+                // Against a fixed or scripted body the contact acts at the moving body's
+                // surface (its lever arm exact, whatever the gap); between two moving
+                // bodies, midway.
+                let at = match (dyn_a, dyn_b) {
+                    (true, false) => point.point_a,
+                    (false, true) => point.point_b,
+                    _ => point.midpoint(),
+                };
+                // The manifold's normal points from a to b: body 1 is b, body 2 is a.
+                contacts.push(Contact {
+                    body1: kb,
+                    body2: Some(ka),
+                    point: at,
+                    normal,
+                    friction,
+                    target_normal_velocity: 0.0,
+                    velocity_bias: DVec3::ZERO,
+                    lever_arms: None,
+                    impulse: self
+                        .contact_frame(normal)?
+                        .to_contact(warm.unwrap_or_default()),
+                });
+                gaps.push(point.gap);
+                origin.push((p, m, q));
             }
         }
         // The stabilisation asks each point for the gap of the plane fitted to its patch's gaps:
@@ -770,8 +774,8 @@ impl World {
                 h0 = h0.min(allowed.max(settings.min_step));
             }
         }
-        // An island at rest whose contacts all lie in the rest band (no speculative point, no
-        // strike, no correction asked) takes the long step, its warm start scaled to it.
+        // An island at rest whose contacts ask for no push (no gap below the rest band, no
+        // speculative point, no strike) takes the long step, its warm start scaled to it.
         if let Some(long) = rest {
             let asks = patch_targets(&contacts, &patches, &gaps, |g| self.stabilisation_speed(g));
             let struck = self.counters.transients > transients_before;
@@ -957,14 +961,10 @@ impl World {
     /// the sleep time (bodies under load functions never sleep).
     fn sleep_if_still(&mut self, island: &Island) {
         let settings = self.islands.settings;
-        let v_sleep = settings.sleep_speed_factor * self.micro_speed();
         let t = self.time;
         let mut all = true;
         for &i in &island.bodies {
-            let b = self.b(i);
-            let speed = b.velocity.length() + b.omega.length() * b.r_max;
-            let loaded = self.loads.iter().any(|l| l.body == i);
-            if speed < v_sleep && !loaded {
+            if self.is_still(i) {
                 let since = *self.islands.still_since.entry(i).or_insert(t);
                 all &= t - since >= settings.sleep_time;
             } else {

@@ -15,6 +15,15 @@ fn tipped_box(a: f64, b: f64, c: f64, theta: f64, gap: f64) -> (Convex, Pose) {
     (cuboid(DVec3::new(a, b, c)), Pose::new(q, centre))
 }
 
+/// The clearance `o` reports is `expected` (a closed form) to [`EXACT`].
+fn assert_clearance(o: &Outside, expected: f64, what: &str) {
+    assert!(
+        (o.clearance - expected).abs() < EXACT,
+        "{what}: clearance {} against {expected}",
+        o.clearance
+    );
+}
+
 /// A box tipped by θ on its edge: the manifold holds the edge's two ends; nothing else is
 /// within the tolerance, and the clearance is the height of the far bottom edge,
 /// gap + 2a·sin θ (the floor's own vertices are all farther).
@@ -29,11 +38,7 @@ fn a_tipped_box_is_cleared_by_the_height_of_its_far_edge() {
         let o = convex_outside(&bx, &pb, &fl, &pf, &m, TOL);
         assert!(o.points.is_empty(), "θ {theta}: {:?}", o.points);
         let expected = gap + 2.0 * a * theta.sin();
-        assert!(
-            (o.clearance - expected).abs() < EXACT,
-            "θ {theta}: clearance {} against {expected}",
-            o.clearance
-        );
+        assert_clearance(&o, expected, &format!("θ {theta}"));
     }
 }
 
@@ -92,11 +97,7 @@ fn a_flat_coin_leaves_twelve_corners_to_the_outside_points() {
     corners.dedup();
     assert_eq!(corners.len(), 16);
     // The top corners are the clearance: 2h above the floor, plus the gap.
-    assert!(
-        (o.clearance - (2.0 * h + gap)).abs() < EXACT,
-        "{}",
-        o.clearance
-    );
+    assert_clearance(&o, 2.0 * h + gap, "coin");
 }
 
 /// A bar lying across a narrower block on one of its edges (the bar turned 45° about its
@@ -126,11 +127,7 @@ fn an_overhanging_edge_is_stood_for_by_its_clipped_points() {
     let o = convex_outside(&bar, &pbar, &block, &pblock, &m, TOL);
     assert!(o.points.is_empty());
     let expected = (half * 2f64.sqrt() + gap).min((w + zc) / 2f64.sqrt() - half);
-    assert!(
-        (o.clearance - expected).abs() < EXACT,
-        "clearance {} against {expected}",
-        o.clearance
-    );
+    assert_clearance(&o, expected, "bar");
 }
 
 /// A small cube standing on a big one, face on face: the manifold is the overlap of the two
@@ -151,10 +148,6 @@ fn face_on_face_the_corners_off_the_overlap_are_stood_for() {
         let o = convex_outside(&big, &pbig, &small, &psmall, &m, TOL);
         assert!(o.points.is_empty(), "at ({x}, {y}): {:?}", o.points);
         let expected = 2.0 * s + gap;
-        assert!(
-            (o.clearance - expected).abs() < EXACT,
-            "at ({x}, {y}): clearance {} against {expected}",
-            o.clearance
-        );
+        assert_clearance(&o, expected, &format!("at ({x}, {y})"));
     }
 }
