@@ -760,3 +760,31 @@ fn explicit_lever_arms_are_where_the_impulse_acts() {
     );
     assert!(p.z > 0.0, "the floor pushes up: {p}");
 }
+
+/// A box resting on a scripted platform (a [`Body::Fixed`] island body that moves and turns):
+/// the platform's velocity is untouched by the solve (infinite mass), and the box's corners,
+/// sticking, end with the platform's velocity at each corner, v + ω × r measured here from
+/// the two bodies' final velocities.
+#[test]
+fn a_moving_fixed_body_carries_a_sticking_box_and_is_not_moved() {
+    let half = DVec3::new(0.1, 0.1, 0.05);
+    let (mut box1, _) = box_body(2.0, half, DVec3::new(0.0, 0.0, half.z));
+    box1.velocity.z -= G * H;
+    let platform = IslandBody {
+        body: Body::Fixed,
+        com: DVec3::new(0.3, -0.2, -0.1),
+        velocity: DVec3::new(2e-3, -1e-3, 0.0),
+        omega: DVec3::new(0.0, 0.0, 5e-3),
+    };
+    let mut bodies = vec![box1, platform];
+    let mut contacts = face_contacts(DVec3::ZERO, half, 0.0, 0, Some(1), 2.0);
+    let report = solve_contacts(&mut bodies, &mut contacts, &tight()).unwrap();
+    assert!(report.converged);
+    assert_eq!(bodies[1], platform, "the fixed body must not move");
+    for c in &contacts {
+        let u = (bodies[0].velocity + bodies[0].omega.cross(c.point - bodies[0].com))
+            - (platform.velocity + platform.omega.cross(c.point - platform.com));
+        assert!(u.length() < 1e-9, "corner {:?} slips at {u:?}", c.point);
+        assert!(c.impulse.z > 0.0, "every corner presses");
+    }
+}
