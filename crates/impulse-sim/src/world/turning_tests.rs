@@ -4,7 +4,7 @@
 
 use glam::{DQuat, DVec3};
 
-use crate::scene::{BodyDesc, ContactDesc, Scene, SceneDesc, ShapeDesc};
+use crate::scene::{BodyDesc, ContactDesc, RotationDesc, Scene, SceneDesc, ShapeDesc};
 use crate::sustained::ContactMode;
 use crate::world::World;
 
@@ -302,5 +302,59 @@ fn a_ball_on_a_spinning_platter_keeps_the_nominal_step() {
         "{} solves for {} steps",
         c.island_solves,
         c.island_steps
+    );
+}
+
+/// A coin (a 16-sided prism, copper, of the bundled coins) laid on a plate at rest, tilted
+/// so that only its low side lies within ε_c: its held manifold is a cluster of rim vertices
+/// on that side, and its centre of mass is outside them, so the held load tips it over them
+/// and the unheld side falls toward the plate. The step must end before that side has come
+/// through the envelope, whatever the speeds at the step's start allowed (here zero: an island
+/// at rest takes a step eight times the nominal one). Judge: the independent monitor
+/// (checking mode); the coin must come to rest flat within ε_c.
+#[test]
+fn a_coin_held_by_one_side_does_not_fall_through_its_plate() {
+    let eps = 5e-6;
+    let (radius, half_height): (f64, f64) = (0.012, 0.000875);
+    // Low rim 0.3 ε_c above the plate, high rim 1.4 ε_c.
+    let (low, high) = (0.3 * eps, 1.4 * eps);
+    let tilt = ((high - low) / (2.0 * radius)).atan();
+    let desc = SceneDesc::new()
+        .with_collision_epsilon(eps)
+        .with_contact_model(ContactMode::Switching)
+        .with_gravity([0.0, 0.0, -G])
+        .with_default_contact(ContactDesc::new(0.3, 0.4))
+        .with_body(
+            BodyDesc::fixed("plate", ShapeDesc::cuboid([0.2, 0.2, 0.01])).at([0.0, 0.0, -0.01]),
+        )
+        .with_body(
+            BodyDesc::new("coin", ShapeDesc::prism(16, radius, half_height))
+                .at([0.0, 0.0, half_height + 0.5 * (low + high)])
+                .with_rotation(RotationDesc::AxisAngle {
+                    axis: [1.0, 0.0, 0.0],
+                    degrees: tilt.to_degrees(),
+                })
+                .with_density(8900.0),
+        );
+    let mut world = World::from_scene(&Scene::new(desc, ".")).expect("a valid scene");
+    world.set_checking(true);
+    world.step_until(0.1).expect("runs");
+    let depth = world.checked_penetration().expect("checking").max_depth;
+    let coin = world
+        .bodies()
+        .find(|(_, b)| b.name == "coin")
+        .map(|(h, _)| h)
+        .expect("the coin");
+    let s = world.state(coin).expect("live");
+    println!(
+        "coin on one side: depth {:.3} ε_c, z {:.3e}",
+        depth / eps,
+        s.position.z
+    );
+    assert!(depth <= eps, "the coin sank {:.2} ε_c", depth / eps);
+    assert!(
+        (s.position.z - half_height).abs() <= eps,
+        "the coin rests at {:.2} ε_c from flat contact",
+        (s.position.z - half_height) / eps
     );
 }
