@@ -51,11 +51,13 @@ pub struct Edge {
 
 impl Edge {
     /// The endpoint that is not `v` (`v` must be an endpoint).
+    #[inline]
     pub fn other_vertex(&self, v: u32) -> u32 {
         if v == self.tail { self.head } else { self.tail }
     }
 
     /// The face that is not `f` (`f` must be one of the edge's faces).
+    #[inline]
     pub fn other_face(&self, f: u32) -> u32 {
         if f == self.left {
             self.right
@@ -158,48 +160,57 @@ impl ConvexPolyhedron {
     }
 
     /// Vertex positions (body frame).
+    #[inline]
     pub fn vertices(&self) -> &[DVec3] {
         self.mesh.vertices()
     }
 
     /// Position of vertex `v`.
+    #[inline]
     pub fn vertex(&self, v: u32) -> DVec3 {
         self.mesh.vertices()[v as usize]
     }
 
     /// Number of faces.
+    #[inline]
     pub fn face_count(&self) -> usize {
         self.planes.len()
     }
 
     /// Vertices of face `f`, counter-clockwise seen from outside.
+    #[inline]
     pub fn face_vertices(&self, f: u32) -> &[u32] {
         self.mesh.face(f as usize)
     }
 
     /// Edges of face `f`, in loop order: edge `k` joins `face_vertices(f)[k]` to
     /// `face_vertices(f)[k + 1]` (cyclically).
+    #[inline]
     pub fn face_edges(&self, f: u32) -> &[u32] {
         let start = self.mesh.face_start(f as usize);
         &self.face_edges[start..start + self.mesh.face(f as usize).len()]
     }
 
     /// Outward plane of face `f`.
+    #[inline]
     pub fn face_plane(&self, f: u32) -> Plane {
         self.planes[f as usize]
     }
 
     /// All face planes, indexed by face.
+    #[inline]
     pub fn planes(&self) -> &[Plane] {
         &self.planes
     }
 
     /// All edges.
+    #[inline]
     pub fn edges(&self) -> &[Edge] {
         &self.edges
     }
 
     /// Edge `e`.
+    #[inline]
     pub fn edge(&self, e: u32) -> Edge {
         self.edges[e as usize]
     }
@@ -207,6 +218,7 @@ impl ConvexPolyhedron {
     /// Edges incident to vertex `v`, counter-clockwise seen from outside. Between consecutive
     /// edges `e_i`, `e_{i+1}` lies the face that is the left face of `e_{i+1}` when it is
     /// oriented away from `v`.
+    #[inline]
     pub fn vertex_edges(&self, v: u32) -> &[u32] {
         let r = self.vertex_edge_starts[v as usize] as usize
             ..self.vertex_edge_starts[v as usize + 1] as usize;
@@ -216,6 +228,7 @@ impl ConvexPolyhedron {
     /// The length scale this polyhedron was validated with: points within it of a face plane
     /// count as on the face. It is [`tol::POLYHEDRON_REL`] times the bounding-box diagonal of
     /// the input.
+    #[inline]
     pub fn tolerance(&self) -> f64 {
         self.tolerance
     }

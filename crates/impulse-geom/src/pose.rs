@@ -117,6 +117,7 @@ impl Pose {
     }
 
     /// Inverse transform, from A back to B: `(Rᵀ, −Rᵀp)`.
+    #[inline]
     #[must_use]
     pub fn inverse(&self) -> Pose {
         let r_inv = self.rotation.conjugate();
@@ -127,30 +128,35 @@ impl Pose {
     }
 
     /// Maps a point from B to A coordinates: `R·x + p` (m).
+    #[inline]
     #[must_use]
     pub fn transform_point(&self, x: DVec3) -> DVec3 {
         self.rotation * x + self.translation
     }
 
     /// Maps a free vector (direction, velocity, force) from B to A axes: `R·x`.
+    #[inline]
     #[must_use]
     pub fn transform_vector(&self, x: DVec3) -> DVec3 {
         self.rotation * x
     }
 
     /// Maps a point from A back to B coordinates: `Rᵀ(x − p)` (m).
+    #[inline]
     #[must_use]
     pub fn inverse_transform_point(&self, x: DVec3) -> DVec3 {
         self.rotation.conjugate() * (x - self.translation)
     }
 
     /// Maps a free vector from A back to B axes: `Rᵀx`.
+    #[inline]
     #[must_use]
     pub fn inverse_transform_vector(&self, x: DVec3) -> DVec3 {
         self.rotation.conjugate() * x
     }
 
     /// Rotation matrix R (B's axes in A's coordinates, as columns).
+    #[inline]
     #[must_use]
     pub fn rotation_matrix(&self) -> DMat3 {
         DMat3::from_quat(self.rotation)
@@ -271,6 +277,7 @@ impl Mul<Pose> for Pose {
     /// Composition `a * b`: apply `b` first, then `a` (`x ↦ a(b(x))`), i.e. `b` places frame C
     /// in B and `a` places B in A. The product quaternion is renormalised so that long chains of
     /// compositions do not drift off the unit sphere.
+    #[inline]
     fn mul(self, b: Pose) -> Pose {
         Pose {
             rotation: (self.rotation * b.rotation).normalize(),

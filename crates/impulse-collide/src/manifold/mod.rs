@@ -134,6 +134,7 @@ pub struct ContactPoint {
 
 impl ContactPoint {
     /// Midway between the two bodies' points (world).
+    #[inline]
     pub fn midpoint(&self) -> DVec3 {
         0.5 * (self.point_a + self.point_b)
     }
@@ -178,11 +179,13 @@ impl Manifold {
     }
 
     /// The contact points (one to [`MAX_POINTS`]).
+    #[inline]
     pub fn points(&self) -> &[ContactPoint] {
         &self.points[..self.count as usize]
     }
 
     /// The smallest gap over the points (the deepest point's).
+    #[inline]
     pub fn min_gap(&self) -> f64 {
         self.points()
             .iter()

@@ -375,10 +375,12 @@ fn prepare(
             });
         }
     }
-    contacts
-        .iter()
-        .map(|c| prepare_row(bodies, c))
-        .collect::<Result<Vec<_>, _>>()
+    // Sized at once: a row is several hundred bytes, and a growing vector moves them all.
+    let mut rows = Vec::with_capacity(contacts.len());
+    for c in contacts {
+        rows.push(prepare_row(bodies, c)?);
+    }
+    Ok(rows)
 }
 
 /// One contact's row, after checking it.
