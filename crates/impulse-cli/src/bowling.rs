@@ -233,6 +233,18 @@ fn z(x: f64) -> String {
     }
 }
 
+/// One cell of the summary: mean ± standard error (throws), a dash where a figure is unknown
+/// (no throws; a standard error needs two).
+fn mean_cell(x: &Mean) -> String {
+    if x.n == 0 {
+        "      –        (0)".to_string()
+    } else if x.se.is_finite() {
+        format!("{:5.2} ± {:4.2} ({:3})", x.mean, x.se, x.n)
+    } else {
+        format!("{:5.2} ±    – ({:3})", x.mean, x.n)
+    }
+}
+
 /// The printed summary of a study.
 fn report(file: &BowlingFile, shard: Shard, wall: Option<f64>) -> String {
     let sum = bowling::summarize(&file.outcomes, file.settings.window());
@@ -266,13 +278,7 @@ fn report(file: &BowlingFile, shard: Shard, wall: Option<f64>) -> String {
             file.outcomes.len() as f64 / w.max(1e-9)
         );
     }
-    let m = |x: &Mean| {
-        if x.n == 0 {
-            "      –        (0)".to_string()
-        } else {
-            format!("{:5.2} ± {:4.2} ({:3})", x.mean, x.se, x.n)
-        }
-    };
+    let m = mean_cell;
     let _ = writeln!(
         t,
         "\nmean pins felled ± standard error (throws)   straight            hook"
@@ -346,4 +352,21 @@ fn merge(files: &[PathBuf], out: &Path) -> Result<String, String> {
         );
     }
     Ok(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cell of one throw has a mean but no standard error: a dash, not NaN, in the columns
+    /// of the others.
+    #[test]
+    fn a_single_throw_prints_a_dash_for_its_standard_error() {
+        let one = mean_cell(&Mean::of([9.0]));
+        let two = mean_cell(&Mean::of([8.0, 9.0]));
+        assert_eq!(one, " 9.00 ±    – (  1)");
+        assert_eq!(two, " 8.50 ± 0.50 (  2)");
+        assert_eq!(one.chars().count(), two.chars().count());
+        assert_eq!(mean_cell(&Mean::of([])), "      –        (0)");
+    }
 }
