@@ -45,8 +45,9 @@
 //! disk's rim (`cargo bench -p impulse-response --bench contact`, one run: a warm step of
 //! the stack of 8 took 18.7 µs against 34.0 µs with a cross product and an inertia product
 //! per body per update and separate normal and friction updates, the stack of 16 308 µs
-//! against 795 µs). The number of sweeps needed grows with the island's height (a load travels one contact per sweep in the worst
-//! order), which warm starting across steps hides for islands at rest.
+//! against 795 µs). The number of sweeps needed grows with the island's height (a load
+//! travels one contact per sweep in the worst order), which warm starting across steps hides
+//! for islands at rest.
 //!
 //! **Must not know** how the contacts were found (manifolds), the bodies' shapes, or time
 //! stepping: it takes velocities, mass properties and contact points, and returns impulses.
@@ -438,8 +439,7 @@ fn prepare_row(bodies: &[IslandBody], c: &Contact) -> Result<Row, ResponseError>
         return Err(ResponseError::NormalUnreachable { k33: k_nn, scale });
     }
     let k_t = largest_eigenvalue_2x2(k.x_axis.x, k.y_axis.x, k.y_axis.y);
-    let axes = frame.to_world(DVec3::X);
-    let axes = DMat3::from_cols(axes, frame.to_world(DVec3::Y), frame.to_world(DVec3::Z));
+    let axes = frame.axes();
     Ok(Row {
         bias: frame.to_contact(c.velocity_bias),
         to_contact: axes.transpose(),

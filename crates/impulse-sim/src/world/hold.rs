@@ -355,18 +355,54 @@ fn pair_turn(a: &crate::body::Body, b: &crate::body::Body, struck: bool, n: Opti
 /// piece of a compound body (a ball rolling from a dish's slope onto its floor): with a
 /// compound, or when no normal is known yet, the whole relative speed of the centres counts.
 pub(super) fn turn_speed(a: &crate::body::Body, b: &crate::body::Body, n: Option<DVec3>) -> f64 {
-    let v = |x: &crate::body::Body| {
-        if x.is_dynamic() && !x.asleep {
-            x.velocity
-        } else {
-            DVec3::ZERO
-        }
+    approach_speed(
+        &TurnSide::of(a, a.velocity, a.omega),
+        &TurnSide::of(b, b.velocity, b.omega),
+        n,
+    )
+}
+
+/// What [`approach_speed`] reads of one side of a pair.
+pub(super) struct TurnSide {
+    /// The centre's velocity (zero for a fixed, scripted or sleeping body).
+    velocity: DVec3,
+    /// ‖ω‖ times the rotational reach (zero for a fixed, scripted or sleeping body: a platter
+    /// spinning under a ball turns its face in its own plane).
+    spin_reach: f64,
+    /// Whether the body is a compound.
+    compound: bool,
+}
+
+impl TurnSide {
+    /// No body (the fixed world).
+    pub(super) const NONE: Self = Self {
+        velocity: DVec3::ZERO,
+        spin_reach: 0.0,
+        compound: false,
     };
-    let dv = v(a) - v(b);
-    let compound = a.reach.len() > 1 || b.reach.len() > 1;
+
+    /// Body `x` moving at `velocity` and `omega` (its own, or a step's trial velocities).
+    pub(super) fn of(x: &crate::body::Body, velocity: DVec3, omega: DVec3) -> Self {
+        let moving = x.is_dynamic() && !x.asleep;
+        Self {
+            velocity: if moving { velocity } else { DVec3::ZERO },
+            spin_reach: if moving {
+                omega.length() * x.max_reach()
+            } else {
+                0.0
+            },
+            compound: x.reach.len() > 1,
+        }
+    }
+}
+
+/// [`turn_speed`] of two sides: their rotation plus the relative speed of their centres
+/// along `n` (all of it with a compound, or without a normal).
+pub(super) fn approach_speed(a: &TurnSide, b: &TurnSide, n: Option<DVec3>) -> f64 {
+    let dv = a.velocity - b.velocity;
     let normal = match n {
-        Some(n) if !compound => dv.dot(n.normalize_or_zero()).abs(),
+        Some(n) if !(a.compound || b.compound) => dv.dot(n.normalize_or_zero()).abs(),
         _ => dv.length(),
     };
-    rotation_speed(a, b) + normal
+    a.spin_reach + b.spin_reach + normal
 }

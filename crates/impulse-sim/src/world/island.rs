@@ -13,6 +13,7 @@ use rustc_hash::FxHashMap;
 
 use super::World;
 use super::hold::PairContact;
+use super::hold::{TurnSide, approach_speed};
 use super::patch::{patch_plane_fit, patch_ranges, patch_targets};
 use crate::contact::response_body;
 use crate::error::SimError;
@@ -981,34 +982,12 @@ impl World {
     }
 
     /// How fast another feature of a held contact's pair can approach with the island's
-    /// bodies at velocities `v` (`ids`: their world ids): their rotation, ‖ω‖ times the
-    /// rotational reach of each, and the relative speed of their centres along the normal
-    /// (all of it for a compound, whose other pieces sliding brings closer), as
-    /// [`super::hold::turn_speed`] measures a pair.
+    /// bodies at velocities `v` (`ids`: their world ids), as [`super::hold::turn_speed`]
+    /// measures a pair.
     fn contact_turn(&self, ids: &[u32], v: &[IslandBody], c: &Contact) -> f64 {
-        // As there, a fixed or scripted body's motion does not count (a platter spinning
-        // under a ball turns its face in its own plane).
-        let side = |k: usize| {
-            let b = self.b(ids[k]);
-            if b.is_dynamic() {
-                (
-                    v[k].velocity,
-                    v[k].omega.length() * b.max_reach(),
-                    b.reach.len() > 1,
-                )
-            } else {
-                (DVec3::ZERO, 0.0, b.reach.len() > 1)
-            }
-        };
-        let (v1, spin1, compound1) = side(c.body1);
-        let (v2, spin2, compound2) = c.body2.map_or((DVec3::ZERO, 0.0, false), side);
-        let dv = v1 - v2;
-        let centres = if compound1 || compound2 {
-            dv.length()
-        } else {
-            dv.dot(c.normal.normalize()).abs()
-        };
-        spin1 + spin2 + centres
+        let side = |k: usize| TurnSide::of(self.b(ids[k]), v[k].velocity, v[k].omega);
+        let other = c.body2.map_or(TurnSide::NONE, side);
+        approach_speed(&side(c.body1), &other, Some(c.normal))
     }
 
     /// The solver's frame of a contact with this normal ([`Contact::impulse`] is in its

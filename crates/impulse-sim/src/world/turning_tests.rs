@@ -197,6 +197,20 @@ fn the_pivot_reference_tends_to_uniform_turning_when_gravity_is_negligible() {
     assert!((t - 0.5 / 1e4).abs() / (0.5 / 1e4) < 1e-6, "{t}");
 }
 
+/// A switching scene of envelope `eps` under gravity: a fixed plate whose top is the plane
+/// z = 0, contact `contact` throughout, and `coin`.
+fn on_plate(eps: f64, contact: ContactDesc, coin: BodyDesc) -> SceneDesc {
+    SceneDesc::new()
+        .with_collision_epsilon(eps)
+        .with_contact_model(ContactMode::Switching)
+        .with_gravity([0.0, 0.0, -G])
+        .with_default_contact(contact)
+        .with_body(
+            BodyDesc::fixed("plate", ShapeDesc::cuboid([0.2, 0.2, 0.01])).at([0.0, 0.0, -0.01]),
+        )
+        .with_body(coin)
+}
+
 /// Coin geometry of the bundled coins scene (m): a 16-gon prism 24 mm across, 1.75 mm thick.
 const COIN: (u32, f64, f64) = (16, 0.012, 0.000875);
 
@@ -227,24 +241,18 @@ fn coins_falling_flat_while_turning_stay_out_of_the_plate() {
                 (q * DVec3::new(r * a.cos(), r * a.sin(), -h)).z
             })
             .fold(f64::INFINITY, f64::min);
-        let desc = SceneDesc::new()
-            .with_collision_epsilon(COIN_EPS)
-            .with_contact_model(ContactMode::Switching)
-            .with_gravity([0.0, 0.0, -G])
-            .with_default_contact(ContactDesc::new(0.3, 0.3))
-            .with_body(
-                BodyDesc::fixed("plate", ShapeDesc::cuboid([0.2, 0.2, 0.01])).at([0.0, 0.0, -0.01]),
-            )
-            .with_body(
-                BodyDesc::new("coin", ShapeDesc::prism(sides, r, h))
-                    .at([0.0, 0.0, -low + 0.5 * COIN_EPS])
-                    .with_rotation(crate::scene::RotationDesc::AxisAngle {
-                        axis: [1.0, 0.0, 0.0],
-                        degrees: tilt,
-                    })
-                    .with_angular_velocity([tip, 0.0, spin])
-                    .with_density(8900.0),
-            );
+        let desc = on_plate(
+            COIN_EPS,
+            ContactDesc::new(0.3, 0.3),
+            BodyDesc::new("coin", ShapeDesc::prism(sides, r, h))
+                .at([0.0, 0.0, -low + 0.5 * COIN_EPS])
+                .with_rotation(RotationDesc::AxisAngle {
+                    axis: [1.0, 0.0, 0.0],
+                    degrees: tilt,
+                })
+                .with_angular_velocity([tip, 0.0, spin])
+                .with_density(8900.0),
+        );
         let mut world = World::from_scene(&Scene::new(desc, ".")).expect("a valid scene");
         world.set_checking(true);
         let start = world.kinetic_energy() + world.potential_energy();
@@ -319,23 +327,17 @@ fn a_coin_held_by_one_side_does_not_fall_through_its_plate() {
     // Low rim 0.3 ε_c above the plate, high rim 1.4 ε_c.
     let (low, high) = (0.3 * eps, 1.4 * eps);
     let tilt = ((high - low) / (2.0 * radius)).atan();
-    let desc = SceneDesc::new()
-        .with_collision_epsilon(eps)
-        .with_contact_model(ContactMode::Switching)
-        .with_gravity([0.0, 0.0, -G])
-        .with_default_contact(ContactDesc::new(0.3, 0.4))
-        .with_body(
-            BodyDesc::fixed("plate", ShapeDesc::cuboid([0.2, 0.2, 0.01])).at([0.0, 0.0, -0.01]),
-        )
-        .with_body(
-            BodyDesc::new("coin", ShapeDesc::prism(16, radius, half_height))
-                .at([0.0, 0.0, half_height + 0.5 * (low + high)])
-                .with_rotation(RotationDesc::AxisAngle {
-                    axis: [1.0, 0.0, 0.0],
-                    degrees: tilt.to_degrees(),
-                })
-                .with_density(8900.0),
-        );
+    let desc = on_plate(
+        eps,
+        ContactDesc::new(0.3, 0.4),
+        BodyDesc::new("coin", ShapeDesc::prism(16, radius, half_height))
+            .at([0.0, 0.0, half_height + 0.5 * (low + high)])
+            .with_rotation(RotationDesc::AxisAngle {
+                axis: [1.0, 0.0, 0.0],
+                degrees: tilt.to_degrees(),
+            })
+            .with_density(8900.0),
+    );
     let mut world = World::from_scene(&Scene::new(desc, ".")).expect("a valid scene");
     world.set_checking(true);
     world.step_until(0.1).expect("runs");
