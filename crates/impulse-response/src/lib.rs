@@ -50,7 +50,9 @@ pub mod reference;
 pub use body::{
     Body, ContactFrame, collision_matrix_world, cross_matrix, relative_contact_velocity,
 };
-pub use contact::{Contact, IslandBody, SolveReport, SolverSettings, solve_contacts};
+pub use contact::{
+    Contact, IslandBody, Member, SolveReport, SolverSettings, System, solve_contacts, solve_island,
+};
 pub use integrate::{
     Mode, Parameter, Phase, Response, ResponseKind, Restitution, Settings, Stats, Sticking,
     TraceSample, resolve,

@@ -49,6 +49,12 @@
 //! travels one contact per sweep in the worst order), which warm starting across steps hides
 //! for islands at rest.
 //!
+//! **Jointed systems** ([`solve_island`], `system.rs`): bodies of an island may be links of
+//! a mechanism (a multibody), given as the link's Jacobian and the response M⁻¹Jᵀ of the
+//! mechanism's generalized velocity; their contacts read and change that velocity, with the
+//! same sweep. The solver does not know how those were computed (thesis §5.3's impulse-space
+//! articulated-body recursion, in `impulse-multibody`, for the world's multibodies).
+//!
 //! **Must not know** how the contacts were found (manifolds), the bodies' shapes, or time
 //! stepping: it takes velocities, mass properties and contact points, and returns impulses.
 
@@ -57,10 +63,15 @@ use glam::{DMat3, DVec2, DVec3};
 use crate::{Body, ContactFrame, ResponseError, collision_matrix_world};
 
 mod direct;
+mod system;
+#[cfg(test)]
+mod system_tests;
 #[cfg(test)]
 mod tests;
 
 pub use direct::{DENSE_UP_TO, LAW_SLACK, MAX_ROUNDS, REGULARISATION};
+use system::{LinkRows, Membership};
+pub use system::{Member, System};
 
 /// One body of an island, as the solver sees it: mass properties, centre of mass and velocity,
 /// all in world axes. The solver changes `velocity` and `omega` in place.
@@ -181,6 +192,9 @@ struct Row {
     side1: Side,
     /// Body 2's side, as body 1's (unused without a body 2).
     side2: Side,
+    /// The sides that are links of a [`System`] (their rigid [`Side`]s are a fixed body's,
+    /// at rest): boxed, since most rows have none and a sweep reads rows in order.
+    links: Option<Box<LinkRows>>,
 }
 
 /// One body's side of a [`Row`].
@@ -233,13 +247,44 @@ pub fn solve_contacts(
     contacts: &mut [Contact],
     settings: &SolverSettings,
 ) -> Result<SolveReport, ResponseError> {
-    let rows = prepare(bodies, contacts, settings)?;
+    solve_island(bodies, &mut [], contacts, settings)
+}
+
+/// [`solve_contacts`] for an island some of whose bodies are links of jointed [`System`]s
+/// (module `system`): their contacts read and change the systems' generalized velocities. The
+/// direct solve on the active set ([`SolverSettings::direct_after`]) is not taken when there
+/// are systems (its couplings know only rigid bodies).
+///
+/// # Errors
+/// As [`solve_contacts`]; also [`ResponseError::InvalidParameter`] for a member naming a body
+/// out of range, twice, or one that is not [`crate::Body::Fixed`], or whose Jacobian or
+/// response does not have the system's length, and [`ResponseError::NonFinite`] for a
+/// non-finite system velocity, Jacobian or response. Bodies, systems and contacts are
+/// unchanged on error.
+pub fn solve_island(
+    bodies: &mut [IslandBody],
+    systems: &mut [System],
+    contacts: &mut [Contact],
+    settings: &SolverSettings,
+) -> Result<SolveReport, ResponseError> {
+    let of = system::membership(bodies, systems)?;
+    let rows = prepare(bodies, systems, &of, contacts, settings)?;
+    // A member's rigid side is a fixed body at rest: its motion is read from its system.
+    for (b, m) in bodies.iter_mut().zip(&of) {
+        if m.is_some() {
+            b.velocity = DVec3::ZERO;
+            b.omega = DVec3::ZERO;
+        }
+    }
     // Warm start: last impulses, projected onto the cone.
     for (c, row) in contacts.iter_mut().zip(&rows) {
         let p_n = c.impulse.z.max(0.0);
         let p_t = clamp_to_disk(DVec2::new(c.impulse.x, c.impulse.y), c.friction * p_n);
         c.impulse = DVec3::new(p_t.x, p_t.y, p_n);
         apply(bodies, c, row, c.impulse);
+        if let Some(links) = &row.links {
+            links.apply(systems, c.impulse);
+        }
     }
     let mut report = SolveReport {
         iterations: 0,
@@ -251,13 +296,16 @@ pub fn solve_contacts(
     while !report.converged && report.iterations < settings.max_iterations {
         let mut residual_squared = 0.0_f64;
         for (c, row) in contacts.iter_mut().zip(&rows) {
-            residual_squared = residual_squared.max(sweep_contact(bodies, c, row));
+            residual_squared = residual_squared.max(sweep_contact(bodies, systems, c, row));
         }
         let residual = residual_squared.sqrt();
         report.iterations += 1;
         report.residual = residual;
         report.converged = residual <= settings.tolerance;
-        if !report.converged && settings.direct_after == Some(report.iterations) {
+        if !report.converged
+            && systems.is_empty()
+            && settings.direct_after == Some(report.iterations)
+        {
             report.direct_tried = true;
             report.direct = direct::solve_active_set(bodies, contacts, &rows, settings.tolerance);
         }
@@ -265,15 +313,26 @@ pub fn solve_contacts(
     if contacts.is_empty() {
         report.residual = 0.0;
     }
+    for s in systems.iter() {
+        s.write_members(bodies);
+    }
     Ok(report)
 }
 
 /// One contact's update (normal row, then the friction disk); returns the square of the
 /// largest contact velocity change it made.
 #[inline(always)]
-fn sweep_contact(bodies: &mut [IslandBody], c: &mut Contact, row: &Row) -> f64 {
+fn sweep_contact(
+    bodies: &mut [IslandBody],
+    systems: &mut [System],
+    c: &mut Contact,
+    row: &Row,
+) -> f64 {
     // Normal row: exact minimiser along it, clamped to p_n ≥ 0.
-    let u = contact_velocity(bodies, c, row);
+    let mut u = contact_velocity(bodies, c, row);
+    if let Some(links) = &row.links {
+        u += links.velocity(systems);
+    }
     let p_n = (c.impulse.z + (c.target_normal_velocity - u.z) * row.inv_k_nn).max(0.0);
     let dp_n = p_n - c.impulse.z;
     // The tangential velocity after the normal update (u + K·(0, 0, Δp_n)).
@@ -283,7 +342,11 @@ fn sweep_contact(bodies: &mut [IslandBody], c: &mut Contact, row: &Row) -> f64 {
     let p_t = clamp_to_disk(p_t_old - u_t * row.inv_k_t, c.friction * p_n);
     let dp_t = p_t - p_t_old;
     // Both updates at once: the velocities are linear in the impulse.
-    apply(bodies, c, row, DVec3::new(dp_t.x, dp_t.y, dp_n));
+    let dp = DVec3::new(dp_t.x, dp_t.y, dp_n);
+    apply(bodies, c, row, dp);
+    if let Some(links) = &row.links {
+        links.apply(systems, dp);
+    }
     c.impulse = DVec3::new(p_t.x, p_t.y, p_n);
     (row.k_nn * dp_n)
         .powi(2)
@@ -352,6 +415,8 @@ fn largest_eigenvalue_2x2(a: f64, b: f64, d: f64) -> f64 {
 /// Validates the input and precomputes every contact's row.
 fn prepare(
     bodies: &[IslandBody],
+    systems: &[System],
+    of: &Membership,
     contacts: &[Contact],
     settings: &SolverSettings,
 ) -> Result<Vec<Row>, ResponseError> {
@@ -379,13 +444,18 @@ fn prepare(
     // Sized at once: a row is several hundred bytes, and a growing vector moves them all.
     let mut rows = Vec::with_capacity(contacts.len());
     for c in contacts {
-        rows.push(prepare_row(bodies, c)?);
+        rows.push(prepare_row(bodies, systems, of, c)?);
     }
     Ok(rows)
 }
 
 /// One contact's row, after checking it.
-fn prepare_row(bodies: &[IslandBody], c: &Contact) -> Result<Row, ResponseError> {
+fn prepare_row(
+    bodies: &[IslandBody],
+    systems: &[System],
+    of: &Membership,
+    c: &Contact,
+) -> Result<Row, ResponseError> {
     let index = |i: usize| -> Result<&IslandBody, ResponseError> {
         bodies.get(i).ok_or(ResponseError::InvalidParameter {
             name: "contact body index",
@@ -432,14 +502,18 @@ fn prepare_row(bodies: &[IslandBody], c: &Contact) -> Result<Row, ResponseError>
         Some(b) => (b.body, c.lever_arms.map_or(c.point - b.com, |(_, a2)| a2)),
         None => (Body::Fixed, DVec3::ZERO),
     };
-    let k = frame.matrix_to_contact(collision_matrix_world(&b1.body, r1, &body2, r2));
+    let axes = frame.axes();
+    let links = LinkRows::new(systems, of, (c.body1, r1), c.body2.map(|j| (j, r2)), axes);
+    let mut k = frame.matrix_to_contact(collision_matrix_world(&b1.body, r1, &body2, r2));
+    if let Some(l) = &links {
+        k += l.matrix();
+    }
     let k_nn = k.z_axis.z;
     let scale = k.x_axis.x + k.y_axis.y + k_nn;
     if !(k_nn > 0.0 && scale.is_finite()) {
         return Err(ResponseError::NormalUnreachable { k33: k_nn, scale });
     }
     let k_t = largest_eigenvalue_2x2(k.x_axis.x, k.y_axis.x, k.y_axis.y);
-    let axes = frame.axes();
     Ok(Row {
         bias: frame.to_contact(c.velocity_bias),
         to_contact: axes.transpose(),
@@ -453,5 +527,6 @@ fn prepare_row(bodies: &[IslandBody], c: &Contact) -> Result<Row, ResponseError>
         k_t,
         inv_k_t: k_t.recip(),
         k,
+        links: links.map(Box::new),
     })
 }
