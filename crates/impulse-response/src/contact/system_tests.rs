@@ -40,8 +40,8 @@ fn rigid_as_system(body: usize, m: f64, inertia: DMat3, v: DVec3, w: DVec3) -> S
         jacobian.push((a, DVec3::ZERO));
         response.push((a / m, DVec3::ZERO));
     }
-    for i in 0..3 {
-        jacobian.push((DVec3::ZERO, e[i]));
+    for (i, a) in e.into_iter().enumerate() {
+        jacobian.push((DVec3::ZERO, a));
         // Δω_i per unit couple about axis j: (I⁻¹)_ij, row i of the symmetric I⁻¹.
         response.push((DVec3::ZERO, inv.row(i)));
     }
@@ -348,7 +348,7 @@ fn random_mechanisms_obey_the_laws_and_change_by_m_inverse_j_transpose_p() {
         // M·Δq̇ = Σ Jₚᵀ p, and the rigid body's momentum change.
         let mut tau = vec![0.0; n];
         let (mut dp_body, mut dl_body) = (DVec3::ZERO, DVec3::ZERO);
-        let mut velocity_of = |k: usize, point: DVec3| -> DVec3 {
+        let velocity_of = |k: usize, point: DVec3| -> DVec3 {
             match k {
                 0 | 1 => point_velocity(&jacs[k], coms[k], point, q),
                 _ => bodies[2].velocity + bodies[2].omega.cross(point - bodies[2].com),
