@@ -430,6 +430,8 @@ pub struct Simulation {
     pub(crate) stepper: Stepper,
     pub(crate) ws: Workspace,
     applied: Vec<f64>,
+    /// Generalized contact forces an island holds over its step ([`crate::held`]).
+    pub(crate) contact: Vec<f64>,
     pub(crate) held: Vec<f64>,
     pub(crate) tau: Vec<f64>,
     slots: Vec<Slot>,
@@ -487,6 +489,7 @@ impl Simulation {
             t: 0.0,
             integrator,
             applied: vec![0.0; nv],
+            contact: vec![0.0; nv],
             held: vec![0.0; nv],
             tau: vec![0.0; nv],
             slots: Vec::new(),
@@ -765,6 +768,9 @@ impl Simulation {
             }
         }
         self.held.copy_from_slice(&self.applied);
+        for (h, c) in self.held.iter_mut().zip(&self.contact) {
+            *h += c;
+        }
         for slot in self.slots.iter().filter(|s| s.enabled) {
             for (h, o) in self.held.iter_mut().zip(&slot.output) {
                 *h += o;

@@ -85,6 +85,7 @@ mod collision;
 mod control;
 mod dynamics;
 mod error;
+pub mod held;
 mod integrate;
 pub mod limit;
 mod model;
