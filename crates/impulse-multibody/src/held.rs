@@ -20,6 +20,7 @@ use crate::control::{Rhs, Simulation};
 use crate::dynamics::Workspace;
 use crate::error::MultibodyError;
 use crate::integrate::Accel;
+use crate::limit::InverseMass;
 use crate::model::{LinkId, Model, check_len};
 
 /// One link's maps, per generalized velocity k (nv entries each): `jacobian[k]` the velocity
@@ -93,6 +94,67 @@ pub fn link_maps(
 }
 
 impl Simulation {
+    /// [`link_maps`] at the current configuration, for a multibody with joints resting on a
+    /// stop ([`crate::limit`]): the stop holds such a joint (its constraint force keeps its
+    /// velocity at zero as long as the load presses it on), so an impulse's response is the
+    /// constrained one, Δv = (M⁻¹ − M⁻¹Sᵀ(S M⁻¹ Sᵀ)⁻¹ S M⁻¹)·Jᵀ with S the resting joints'
+    /// rows: a plank resting on its stop does not give way under a ball.
+    ///
+    /// # Errors
+    /// As [`link_maps`].
+    pub fn link_maps(&mut self, links: &[LinkId]) -> Result<Vec<LinkMaps>, MultibodyError> {
+        let mut maps = link_maps(&self.model, &self.q, links)?;
+        if self.resting.is_empty() {
+            return Ok(maps);
+        }
+        let joints: Vec<usize> = self.resting.iter().map(|s| s.joint).collect();
+        let zeros = vec![0.0; joints.len()];
+        let minv = InverseMass::new(&self.model, &mut self.ws, &self.q)?;
+        let nv = self.model.nv();
+        let mut column = vec![0.0; nv];
+        for map in &mut maps {
+            for c in 0..6 {
+                let at = |r: &(DVec3, DVec3)| if c < 3 { r.0[c] } else { r.1[c - 3] };
+                for (x, r) in column.iter_mut().zip(&map.response) {
+                    *x = at(r);
+                }
+                minv.constrain(&mut column, &joints, &zeros);
+                for (r, x) in map.response.iter_mut().zip(&column) {
+                    if c < 3 {
+                        r.0[c] = *x;
+                    } else {
+                        r.1[c - 3] = *x;
+                    }
+                }
+            }
+        }
+        Ok(maps)
+    }
+
+    /// Replaces the velocity (nv) after an impulse an island applied, keeping the joints
+    /// that rest on a stop resting there (their velocity stays zero: an island's response
+    /// through [`Simulation::link_maps`] does not move them). [`Simulation::set_state`]
+    /// instead starts afresh, every joint off its stop until it strikes one.
+    ///
+    /// # Errors
+    /// [`MultibodyError::DimensionMismatch`] for a wrong length,
+    /// [`MultibodyError::InvalidArgument`] for a non-finite entry; nothing changes then.
+    pub fn set_velocity(&mut self, v: &[f64]) -> Result<(), MultibodyError> {
+        check_len("v", self.model.nv(), v.len())?;
+        if !v.iter().all(|x| x.is_finite()) {
+            return Err(MultibodyError::InvalidArgument {
+                what: "velocity",
+                reason: "not finite".to_owned(),
+            });
+        }
+        self.v.copy_from_slice(v);
+        let vo = self.model.base_dofs();
+        for s in &self.resting {
+            self.v[vo + s.joint] = 0.0;
+        }
+        Ok(())
+    }
+
     /// Sets the generalized contact forces (nv) held from now until they are set again: added
     /// to the applied forces and the controllers' outputs in every derivative evaluation, and
     /// in [`Simulation::link_kinematics`]'s accelerations. A world's contact island sets them

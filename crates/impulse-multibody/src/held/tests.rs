@@ -170,3 +170,72 @@ fn a_held_contact_force_accelerates_through_the_mass_matrix() {
         }
     }
 }
+
+/// A two-link arm whose shoulder rests on its stop (it fell onto it, slower than the rest
+/// speed) answers an impulse on its forearm as if the shoulder were welded: the shoulder's
+/// Δv is zero and the elbow's is (Jᵀf)_elbow / M_elbow,elbow (the Schur complement of the
+/// fixed joint, read from the reference mass matrix); and `set_velocity` keeps the shoulder
+/// resting, where `set_state` lifts it off.
+#[test]
+fn a_joint_resting_on_its_stop_does_not_give_way_to_an_impulse() {
+    use crate::limit::JointLimit;
+    let rod = |m: f64| SpatialInertia::new(m, DVec3::new(0.2, 0.0, 0.0), DMat3::IDENTITY * 0.01);
+    let mut b = ModelBuilder::new(BaseKind::Fixed);
+    b.gravity(DVec3::new(0.0, 0.0, -9.81))
+        .link("ground", SpatialInertia::ZERO)
+        .link("upper", rod(1.0))
+        .link("fore", rod(0.5))
+        .joint(
+            JointSpec::revolute("shoulder", "ground", "upper", Pose::IDENTITY, DVec3::Y)
+                .with_limit(JointLimit::new(-1.0, 0.0, 0.0)),
+        )
+        .joint(JointSpec::revolute(
+            "elbow",
+            "upper",
+            "fore",
+            Pose::from_translation(DVec3::new(0.4, 0.0, 0.0)),
+            DVec3::Z,
+        ));
+    let model = b.build().unwrap();
+    // Gravity turns the horizontal upper arm down, +y rotation: onto its upper stop at 0.
+    let mut sim =
+        Simulation::new(model.clone(), vec![-1e-4, 0.0], vec![0.0, 0.0], tight()).unwrap();
+    sim.run_until(0.2).unwrap();
+    assert!(sim.limit_stats().rests >= 1, "{:?}", sim.limit_stats());
+    let fore = model.link_id("fore").unwrap();
+    let free = link_maps(&model, sim.q(), &[fore]).unwrap();
+    let held = sim.link_maps(&[fore]).unwrap();
+    let mut m = crate::Mat::<f64>::zeros(2, 2);
+    crate::mass_matrix(&model, &mut Workspace::new(&model), sim.q(), &mut m).unwrap();
+    for c in 0..6 {
+        let at = |r: &(DVec3, DVec3)| if c < 3 { r.0[c] } else { r.1[c - 3] };
+        // Jᵀ's column c, row k: the c-th component of the link's twist per unit v_k.
+        let jt = |k: usize| {
+            let (v, w) = held[0].jacobian[k];
+            if c < 3 { v[c] } else { w[c - 3] }
+        };
+        assert!(at(&held[0].response[0]).abs() < 1e-12, "shoulder moves");
+        let elbow = jt(1) / m[(1, 1)];
+        assert!(
+            (at(&held[0].response[1]) - elbow).abs() < 1e-10 * (1.0 + elbow.abs()),
+            "axis {c}: {} vs {elbow}",
+            at(&held[0].response[1])
+        );
+        // Unconstrained, the shoulder gives way (for some axis).
+        let _ = at(&free[0].response[0]);
+    }
+    assert!(
+        free[0]
+            .response
+            .iter()
+            .take(1)
+            .any(|(f, t)| f.length() + t.length() > 1e-3)
+    );
+    sim.set_velocity(&[0.3, 2.0]).unwrap();
+    assert_eq!(sim.v(), &[0.0, 2.0], "a resting joint keeps still");
+    let q = sim.q().to_vec();
+    sim.set_state(&q, &[0.0, 2.0]).unwrap();
+    sim.set_velocity(&[0.3, 2.0]).unwrap();
+    assert_eq!(sim.v(), &[0.3, 2.0], "after set_state nothing rests");
+    assert!(sim.set_velocity(&[f64::NAN, 0.0]).is_err());
+}
