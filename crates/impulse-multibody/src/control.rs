@@ -785,6 +785,21 @@ impl Simulation {
     /// [`MultibodyError::StepSizeUnderflow`] or [`MultibodyError::NonFiniteState`] from the
     /// integrator (the state is then the one at the failure).
     pub fn run_until(&mut self, t_end: f64) -> Result<(), MultibodyError> {
+        self.run(t_end, false).map(|_| ())
+    }
+
+    /// [`Simulation::run_until`], but returning as soon as a joint strikes a stop, with the
+    /// strike resolved ([`crate::limit`]): the time reached, `t_end` when no stop was struck.
+    /// A strike changes the velocity at once, which a world's contact island holding a link
+    /// must see before its held loads act on (they were solved for the velocity before).
+    ///
+    /// # Errors
+    /// As [`Simulation::run_until`].
+    pub fn run_until_strike(&mut self, t_end: f64) -> Result<f64, MultibodyError> {
+        self.run(t_end, true)
+    }
+
+    fn run(&mut self, t_end: f64, stop_at_strike: bool) -> Result<f64, MultibodyError> {
         if !t_end.is_finite() || t_end < self.t {
             return Err(MultibodyError::InvalidArgument {
                 what: "end time",
@@ -794,11 +809,15 @@ impl Simulation {
         loop {
             self.fire_due();
             if self.t >= t_end {
-                return Ok(());
+                return Ok(self.t);
             }
             let next = self.slots.iter().map(Slot::next_time).fold(t_end, f64::min);
             if self.model.has_limits() {
+                let strikes = self.limit_stats.strikes;
                 self.step_with_stops(next)?;
+                if stop_at_strike && self.limit_stats.strikes > strikes {
+                    return Ok(self.t);
+                }
                 continue;
             }
             let mut rhs = Rhs {

@@ -245,3 +245,26 @@ fn malformed_limits_and_states_outside_them_are_refused_naming_the_joint() {
     );
     assert!(sim.set_limit_rest_speed(f64::NAN).is_err());
 }
+
+/// `run_until_strike` returns at the instant a slider dropped from height h onto its stop
+/// strikes it, √(2h/g) in closed form, with the strike resolved (speed −e times the impact
+/// speed √(2gh)); run on, it returns at the next strike, and `run_until` passes them all.
+#[test]
+fn run_until_strike_stops_at_each_strike_with_it_resolved() {
+    let (h, e) = (0.05, 0.5);
+    let model = slider(2.0, e);
+    let mut sim = Simulation::new(model.clone(), vec![h], vec![0.0], tight()).unwrap();
+    let t_hit = (2.0 * h / G).sqrt();
+    let at = sim.run_until_strike(1.0).unwrap();
+    assert!((at - t_hit).abs() < 1e-9, "{at} vs {t_hit}");
+    let v_hit = (2.0 * G * h).sqrt();
+    assert!((sim.v()[0] - e * v_hit).abs() < 1e-6 * v_hit, "{}", sim.v()[0]);
+    // The bounce: up and down again in 2·e·v/g.
+    let next = sim.run_until_strike(1.0).unwrap();
+    assert!((next - at - 2.0 * e * v_hit / G).abs() < 1e-8, "{next}");
+    // Without strikes before the end, the end.
+    let mut plain = Simulation::new(model, vec![h], vec![0.0], tight()).unwrap();
+    assert_eq!(plain.run_until_strike(0.5 * t_hit).unwrap(), 0.5 * t_hit);
+    plain.run_until(1.0).unwrap();
+    assert!(plain.limit_stats().strikes >= 3);
+}
