@@ -399,11 +399,14 @@ impl World {
         }
         if hit {
             self.rekey_others(pair)?;
-            // A body of an island was struck: its island reacts now, through its
-            // constraints, before its held contacts can be driven through.
+            // A body of an island was struck (for a link, its whole multibody): its island
+            // reacts now, through its constraints, before its held contacts can be driven
+            // through.
             for i in [pair.0, pair.1] {
-                if self.is_held_body(i) {
-                    self.step_now(i);
+                for j in self.moved_with(i) {
+                    if self.is_held_body(j) {
+                        self.step_now(j);
+                    }
                 }
             }
         }
@@ -530,8 +533,8 @@ impl World {
             return false;
         }
         let (ba, bb) = (self.b(a), self.b(b));
-        // Contacts of links are impulses (the multibody is not part of an island).
-        if !(ba.is_dynamic() || bb.is_dynamic()) || ba.is_link() || bb.is_link() {
+        // A link joins its island with its multibody (`held_links.rs`).
+        if !(ba.takes_impulses() || bb.takes_impulses()) {
             return false;
         }
         self.is_slow((a, b), x, n) && self.can_hold((a, b), false)
@@ -552,9 +555,7 @@ impl World {
             return false;
         }
         let (ba, bb) = (self.b(a), self.b(b));
-        (ba.is_dynamic() || bb.is_dynamic())
-            && !(ba.is_link() || bb.is_link())
-            && self.can_hold((a, b), true)
+        (ba.takes_impulses() || bb.takes_impulses()) && self.can_hold((a, b), true)
     }
 
     /// Whether the islands could hold a pair with room to spare: held as

@@ -308,7 +308,7 @@ impl World {
 
 /// ‖ω‖ of a body, zero for a fixed or sleeping one.
 fn spin(x: &crate::body::Body) -> f64 {
-    if x.is_dynamic() && !x.asleep {
+    if x.takes_impulses() && !x.asleep {
         x.omega.length()
     } else {
         0.0
@@ -317,7 +317,7 @@ fn spin(x: &crate::body::Body) -> f64 {
 
 /// ‖ω‖ᵏ·r of a body (r its rotational reach), zero for a fixed or sleeping one.
 fn spin_power(x: &crate::body::Body, k: i32) -> f64 {
-    if x.is_dynamic() && !x.asleep {
+    if x.takes_impulses() && !x.asleep {
         x.omega.length().powi(k) * x.max_reach()
     } else {
         0.0
@@ -383,7 +383,7 @@ impl TurnSide {
 
     /// Body `x` moving at `velocity` and `omega` (its own, or a step's trial velocities).
     pub(super) fn of(x: &crate::body::Body, velocity: DVec3, omega: DVec3) -> Self {
-        let moving = x.is_dynamic() && !x.asleep;
+        let moving = x.takes_impulses() && !x.asleep;
         Self {
             velocity: if moving { velocity } else { DVec3::ZERO },
             spin_reach: if moving {

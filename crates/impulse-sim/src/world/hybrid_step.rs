@@ -181,12 +181,6 @@ impl World {
         }
     }
 
-    /// The multibodies' part of the step from `t0` to `t_end` (module documentation): may
-    /// bring `t_end` earlier. Leaves every multibody and its link bodies at `t_end`.
-    ///
-    /// # Errors
-    /// [`SimError::Runtime`] when a multibody cannot be integrated (naming it), or from the
-    /// broad phase and the heap.
     /// The next joint-controller update of any multibody after `t0` (world time; ∞ without
     /// one). A loop step ends there (thesis §5.4: control updates are events in the heap), so
     /// each step's link predictions start from the torques that hold over it. (Measured on a
@@ -200,39 +194,96 @@ impl World {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// One multibody's trial step from `t0` to `t_end` on a copy, with the states it passes
+    /// through; `strike`: stop at the first joint stop struck (the time reached is then
+    /// earlier, and returned).
+    fn multibody_trial(
+        &self,
+        mi: usize,
+        t0: f64,
+        t_end: f64,
+        strike: bool,
+    ) -> Result<(Trial, f64), SimError> {
+        let m = &self.multibodies[mi];
+        let fail = |e: impulse_multibody::MultibodyError| {
+            self.runtime(format!("multibody {}: {e}", m.name))
+        };
+        let mut sim = m.sim.clone();
+        let _ = sim.take_travel();
+        let local = m.local(t_end);
+        let reached = if strike {
+            let at = sim.run_until_strike(local).map_err(fail)?;
+            if at < local { m.offset + at } else { t_end }
+        } else {
+            sim.run_until(local).map_err(fail)?;
+            t_end
+        };
+        let end = sim.link_kinematics().map_err(fail)?;
+        let mut travel = sim.take_travel().unwrap_or_default();
+        for &(id, slot) in &m.links {
+            let (k, b) = (&end[id.index()], self.b(slot));
+            let t = &mut travel[id.index()];
+            // World times, in order, with the step's two ends.
+            for s in &mut t.path {
+                s.t += m.offset;
+            }
+            t.add(reached, k.pose.translation, k.velocity, k.omega);
+            t.add(t0, b.pose.translation, b.velocity, b.omega);
+            t.path.sort_by(|x, y| x.t.total_cmp(&y.t));
+        }
+        Ok(((sim, travel, end), reached))
+    }
+
+    /// The multibodies' part of the step from `t0` to `t_end` (module documentation): may
+    /// bring `t_end` earlier. Leaves every multibody and its link bodies at `t_end`.
+    ///
+    /// A multibody some of whose links an island holds ends the step at its first joint stop
+    /// struck (`held_links.rs`): the strike changes its velocity at once, and its island
+    /// steps at that instant, before its held loads, solved for the velocity before, act on
+    /// (the see-saw's plank bouncing on its stop under a held ball sank it 0.15 ε_c).
+    ///
+    /// # Errors
+    /// [`SimError::Runtime`] when a multibody cannot be integrated (naming it), or from the
+    /// broad phase and the heap.
     pub(super) fn advance_multibodies(&mut self, t0: f64, t_end: &mut f64) -> Result<(), SimError> {
         if self.multibodies.is_empty() {
             return Ok(());
         }
         let g = self.gravity;
         let mut redos = 0;
+        let held: Vec<bool> = (0..self.multibodies.len())
+            .map(|mi| {
+                self.multibodies[mi]
+                    .links
+                    .iter()
+                    .any(|&(_, slot)| self.is_held_body(slot))
+            })
+            .collect();
+        let mut struck: Vec<usize> = Vec::new();
         loop {
             if *t_end <= t0 {
                 return Ok(());
             }
-            // The trial: each multibody on a copy, with the states it passes through.
+            // The trial: each multibody on a copy, with the states it passes through; a held
+            // one up to its first strike, which ends the step for all.
             let mut trials = Vec::with_capacity(self.multibodies.len());
-            for m in &self.multibodies {
-                let mut sim = m.sim.clone();
-                let _ = sim.take_travel();
-                sim.run_until(m.local(*t_end))
-                    .map_err(|e| self.runtime(format!("multibody {}: {e}", m.name)))?;
-                let end = sim
-                    .link_kinematics()
-                    .map_err(|e| self.runtime(format!("multibody {}: {e}", m.name)))?;
-                let mut travel = sim.take_travel().unwrap_or_default();
-                for &(id, slot) in &m.links {
-                    let (k, b) = (&end[id.index()], self.b(slot));
-                    let t = &mut travel[id.index()];
-                    // World times, in order, with the step's two ends.
-                    for s in &mut t.path {
-                        s.t += m.offset;
+            let mut reached = Vec::with_capacity(self.multibodies.len());
+            for (mi, &strike) in held.iter().enumerate() {
+                let (trial, at) = self.multibody_trial(mi, t0, *t_end, strike)?;
+                trials.push(trial);
+                reached.push(at);
+            }
+            let earliest = reached.iter().copied().fold(*t_end, f64::min);
+            struck.clear();
+            if earliest < *t_end {
+                *t_end = earliest;
+                for mi in 0..trials.len() {
+                    if reached[mi] == earliest {
+                        struck.push(mi);
+                    } else {
+                        trials[mi] = self.multibody_trial(mi, t0, earliest, false)?.0;
                     }
-                    t.add(*t_end, k.pose.translation, k.velocity, k.omega);
-                    t.add(t0, b.pose.translation, b.velocity, b.omega);
-                    t.path.sort_by(|x, y| x.t.total_cmp(&y.t));
                 }
-                trials.push((sim, travel, end));
             }
             // The checks.
             let mut widen = Vec::new();
@@ -257,10 +308,15 @@ impl World {
                     let predicted = motion.swept_com_aabb(self.box_span).expanded(allowance);
                     let boxed = predicted.contains_point(t.origin_min)
                         && predicted.contains_point(t.origin_max);
-                    let slacked = self.heap.pairs_of(slot).all(|p| {
-                        self.slack_of(p, slot)
-                            .is_none_or(|s| s.update(&t.path, *t_end).1)
-                    });
+                    // A held pair has no bound to keep (the islands hold it).
+                    let slacked = self
+                        .heap
+                        .pairs_of(slot)
+                        .filter(|p| !self.is_held(*p))
+                        .all(|p| {
+                            self.slack_of(p, slot)
+                                .is_none_or(|s| s.update(&t.path, *t_end).1)
+                        });
                     boxes += u64::from(!boxed);
                     slacks += u64::from(!slacked);
                     if !(boxed && slacked) {
@@ -272,7 +328,16 @@ impl World {
                 if !widen.is_empty() {
                     self.counters.unchecked_steps += 1;
                 }
-                return self.commit_multibodies(trials, *t_end);
+                self.commit_multibodies(trials, *t_end)?;
+                // A struck multibody's islands step now, from its velocity after the strike.
+                for &mi in &struck {
+                    for slot in self.link_slots(mi) {
+                        if self.is_held_body(slot) {
+                            self.step_now(slot);
+                        }
+                    }
+                }
+                return Ok(());
             }
             redos += 1;
             self.counters.rollbacks += 1;

@@ -7,11 +7,12 @@ use impulse_collide::feature::Feature;
 use impulse_collide::manifold::{self, ContactPoint, MAX_POINTS, Manifold, ManifoldCache};
 use impulse_collide::shape::Convex;
 use impulse_response::{
-    Contact, ContactFrame, IslandBody, SolveReport, SolverSettings, solve_contacts,
+    Contact, ContactFrame, IslandBody, SolveReport, SolverSettings, System, solve_island,
 };
 use rustc_hash::FxHashMap;
 
 use super::World;
+use super::held_links::{predict_systems, write_members};
 use super::hold::PairContact;
 use super::hold::{TurnSide, approach_speed};
 use super::patch::{patch_plane_fit, patch_ranges, patch_targets};
@@ -198,7 +199,9 @@ impl World {
     fn is_still(&self, i: u32) -> bool {
         let v_sleep = self.islands.settings.sleep_speed_factor * self.micro_speed();
         let b = self.b(i);
-        b.velocity.length() + b.omega.length() * b.r_max < v_sleep
+        // A link moves with its multibody, which its islands do not put to sleep.
+        !b.is_link()
+            && b.velocity.length() + b.omega.length() * b.r_max < v_sleep
             && !self.loads.iter().any(|l| l.body == i)
     }
 
@@ -299,6 +302,7 @@ impl World {
     fn release(&mut self, pair: (u32, u32)) {
         self.islands.held.remove(&pair);
         for i in [pair.0, pair.1] {
+            self.release_link(i);
             if !self.islands.held.keys().any(|p| p.0 == i || p.1 == i) {
                 let b = self.b_mut(i);
                 b.held_force = DVec3::ZERO;
@@ -374,8 +378,8 @@ impl World {
         woken
     }
 
-    /// The islands: dynamic bodies joined by held pairs (union–find), in a deterministic
-    /// order.
+    /// The islands: dynamic bodies and multibody links joined by held pairs (union–find), the
+    /// held links of one multibody in one island, in a deterministic order.
     fn islands(&self) -> Vec<Island> {
         let n = self.slots.len();
         let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -388,17 +392,30 @@ impl World {
         }
         let mut pairs: Vec<(u32, u32)> = self.islands.held.keys().copied().collect();
         pairs.sort_unstable();
+        let mut join = |a: u32, b: u32| {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra != rb {
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
+        };
+        // The first held link seen of each multibody stands for all of them.
+        let mut first_link: Vec<(u32, u32)> = Vec::new();
         for &(a, b) in &pairs {
-            if self.b(a).is_dynamic() && self.b(b).is_dynamic() {
-                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-                if ra != rb {
-                    parent[ra.max(rb) as usize] = ra.min(rb);
+            if self.b(a).takes_impulses() && self.b(b).takes_impulses() {
+                join(a, b);
+            }
+            for x in [a, b] {
+                if let Some((m, _)) = self.b(x).link {
+                    match first_link.iter().find(|(y, _)| *y == m) {
+                        Some(&(_, l)) => join(l, x),
+                        None => first_link.push((m, x)),
+                    }
                 }
             }
         }
         let mut by_root: std::collections::BTreeMap<u32, Island> = Default::default();
         for &(a, b) in &pairs {
-            let d = if self.b(a).is_dynamic() { a } else { b };
+            let d = if self.b(a).takes_impulses() { a } else { b };
             let root = find(&mut parent, d);
             let island = by_root.entry(root).or_insert_with(|| Island {
                 bodies: Vec::new(),
@@ -406,7 +423,7 @@ impl World {
             });
             island.pairs.push((a, b));
             for x in [a, b] {
-                if self.b(x).is_dynamic() && !island.bodies.contains(&x) {
+                if self.b(x).takes_impulses() && !island.bodies.contains(&x) {
                     island.bodies.push(x);
                 }
             }
@@ -443,7 +460,7 @@ impl World {
             let live = "internal ids name live bodies";
             let ba = self.slots[p.0 as usize].body.as_ref().expect(live);
             let bb = self.slots[p.1 as usize].body.as_ref().expect(live);
-            let sleeping = |b: &crate::body::Body| b.asleep || !b.is_dynamic();
+            let sleeping = |b: &crate::body::Body| b.asleep || !b.takes_impulses();
             if sleeping(ba) && sleeping(bb) {
                 continue;
             }
@@ -465,7 +482,7 @@ impl World {
                 // know of).
                 PairContact::TooFast => {
                     for i in [p.0, p.1] {
-                        if self.b(i).is_dynamic() {
+                        if self.b(i).takes_impulses() {
                             spinning.push(i);
                         }
                     }
@@ -664,7 +681,7 @@ impl World {
                 add(self, p.1, &mut ids, &mut bodies),
             );
             let friction = self.material(p.0, p.1).friction;
-            let (dyn_a, dyn_b) = (self.b(p.0).is_dynamic(), self.b(p.1).is_dynamic());
+            let (dyn_a, dyn_b) = (self.b(p.0).takes_impulses(), self.b(p.1).takes_impulses());
             let held = &self.islands.held[&p];
             // A manifold's points, each manifold a patch; then the outside points, each a
             // patch of its own (they are vertices at different heights, which no plane of
@@ -744,6 +761,9 @@ impl World {
         // solver answers it with huge opposite impulses on redundant corners.
         let patches = patch_ranges(&origin);
         let eps = self.collision_epsilon();
+        // The multibodies of the island's links, as jointed systems (`held_links.rs`).
+        let (mut systems, sources) = self.island_systems(&ids)?;
+        write_members(&systems, &mut bodies);
         // Points beyond the envelope are speculative: they only keep the step from closing
         // their gap (below).
         let speculative: Vec<bool> = gaps.iter().map(|&g| g > eps).collect();
@@ -774,7 +794,7 @@ impl World {
                 c.impulse = DVec3::ZERO;
                 c.target_normal_velocity = target;
             }
-            self.solve(&mut bodies, &mut jolt, &solver)?;
+            self.solve(&mut bodies, &mut systems, &mut jolt, &solver)?;
             self.counters.transients += 1;
             // The step was chosen from the speeds before the strike: it must not let what the
             // strike changed carry a surface through the rest of the envelope (a coin struck
@@ -809,6 +829,7 @@ impl World {
             }
         }
         let after_jolt = bodies.clone();
+        let systems_after_jolt = systems.clone();
         // The step: predict, solve, and locate a slip → stick transition.
         let mut h = h0;
         let mut solved;
@@ -816,7 +837,10 @@ impl World {
         loop {
             tries += 1;
             bodies.clone_from(&after_jolt);
+            systems.clone_from(&systems_after_jolt);
             self.predict(&ids, &mut bodies, h);
+            predict_systems(&mut systems, &sources, h);
+            write_members(&systems, &mut bodies);
             let predicted = bodies.clone();
             // The stabilisation's rate is that of the nominal step: a step cut short by a
             // transition must not push harder.
@@ -851,7 +875,7 @@ impl World {
                 }
             }
             let mut trial = contacts.clone();
-            let report = self.solve(&mut bodies, &mut trial, &solver)?;
+            let report = self.solve(&mut bodies, &mut systems, &mut trial, &solver)?;
             // A direct solve that failed on this island fails again on the same contacts cut
             // to a shorter step: the re-solves that locate a transition go without it.
             if report.direct_tried {
@@ -968,6 +992,7 @@ impl World {
             b.held_force = force;
             b.held_torque = torque;
         }
+        self.hold_link_loads(&sources, &systems_after_jolt, &after_jolt, &solution, h)?;
         // Keep each point's impulse for the next step's warm start.
         for (c, &(p, m, q)) in solution.iter().zip(&origin) {
             let world = self.contact_frame(c.normal)?.to_world(c.impulse);
@@ -1014,10 +1039,11 @@ impl World {
     fn solve(
         &mut self,
         bodies: &mut [IslandBody],
+        systems: &mut [System],
         contacts: &mut [Contact],
         solver: &SolverSettings,
     ) -> Result<SolveReport, SimError> {
-        let report = solve_contacts(bodies, contacts, solver)
+        let report = solve_island(bodies, systems, contacts, solver)
             .map_err(|e| self.runtime(format!("island contact solve: {e}")))?;
         let c = &mut self.counters;
         c.island_solves += 1;

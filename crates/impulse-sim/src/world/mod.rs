@@ -43,6 +43,7 @@
 mod api;
 mod check;
 mod control;
+mod held_links;
 mod hold;
 mod hybrid;
 mod hybrid_contact;
