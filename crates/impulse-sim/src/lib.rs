@@ -74,8 +74,8 @@ pub use scene::{Scene, SceneDesc};
 pub use sustained::{ContactMode, SustainedSettings};
 pub use world::{
     BodyHandle, BodyState, ContactEvent, ContactFailure, Control, ControllerHandle, Counters,
-    LinkShape, Load, LoadFn, Material, MultibodyHandle, Profile, StepReport, World,
-    WorldController, WorldSettings,
+    LinkShape, Load, LoadFn, Material, MultibodyHandle, MultibodyOptions, Profile, StepReport,
+    World, WorldController, WorldSettings,
 };
 
 #[cfg(test)]

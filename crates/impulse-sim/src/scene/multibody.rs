@@ -18,6 +18,10 @@
 //! )
 //! ```
 //!
+//! `self_collision: true` makes its links collide with each other, except adjacent ones (two
+//! links welded together by fixed joints, and the parent and child of each moving joint);
+//! off by default ([`MultibodyDesc::self_collision`], `docs/hybrid.md`).
+//!
 //! Or from a URDF file with overrides ([`UrdfDesc`], `docs/urdf.md`):
 //!
 //! ```ron
@@ -248,6 +252,12 @@ pub struct MultibodyDesc {
     /// Relative error tolerance of the adaptive RK4 integrator per step. Default `1e-9`.
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
+    /// Whether its links collide with each other (self-collision), adjacent links excepted:
+    /// two links welded into one rigid body by fixed joints, and the parent and child of
+    /// every moving joint never do (`impulse_multibody::Model::links_adjacent`). Default
+    /// `false`: links of one multibody never collide.
+    #[serde(default)]
+    pub self_collision: bool,
 }
 
 fn default_tolerance() -> f64 {
