@@ -459,7 +459,10 @@ fn self_collision_matrix_matches_the_dense_reference() {
 /// the tree's linear and angular momentum do not change (an internal impulse) to [`REL`],
 /// kinetic energy does not rise, and the relative normal velocity after is −e times before
 /// (the closed form of a frictionless collision); with friction, momentum and energy as
-/// well. Everything is read from the states before and after.
+/// well. Frictional ones the integrator cannot resolve (its gap on a singular K) are taken
+/// frictionless, as the world takes them, and counted: at most a tenth may be. Everything
+/// is read from the states before and after. The links are never adjacent, as the world
+/// pairs them.
 #[test]
 fn self_collisions_are_internal_and_obey_the_frictionless_closed_form() {
     let mut r = Xoshiro256PlusPlus::seed_from_u64(14);
@@ -483,8 +486,8 @@ fn self_collisions_are_internal_and_obey_the_frictionless_closed_form() {
             n = -u0.normalize();
         }
         cases += 1;
-        let frictionless = cases % 2 == 0;
-        let law = Law {
+        let mut frictionless = cases % 2 == 0;
+        let mut law = Law {
             friction: if frictionless {
                 0.0
             } else {
@@ -497,24 +500,28 @@ fn self_collisions_are_internal_and_obey_the_frictionless_closed_form() {
         let (l0, h0) = momentum(&model, &q, &v0);
         let e0 = kinetic(&model, &q, &v0);
         let mut v = v0.clone();
-        let hit = collide_self(
-            &mut SelfContact {
+        let mut hit = |law: &Law| {
+            let mut contact = SelfContact {
                 model: &model,
                 q: &q,
                 v: &mut v,
                 a,
                 b,
-            },
-            x,
-            n,
-            &law,
-        );
-        let hit = match hit {
+            };
+            collide_self(&mut contact, x, n, law)
+        };
+        let hit = match hit(&law) {
             Ok(hit) => hit,
+            // The chapter-3 integrator's known gap: with friction on the rank-deficient K of
+            // two links a few joints apart, unstable sticking may have no diverging ray
+            // (Theorem 16 needs K positive definite), or the integration its step cap. The
+            // world then falls back to a frictionless impulse: so does this test, which
+            // counts them and bounds their number below.
             Err(err) if !frictionless => {
                 failed += 1;
                 eprintln!("case {cases}: {err}");
-                continue;
+                (frictionless, law.friction) = (true, 0.0);
+                hit(&law).unwrap_or_else(|err| panic!("case {cases}, frictionless: {err}"))
             }
             Err(err) => panic!("case {cases}: {err}"),
         };
@@ -544,7 +551,12 @@ fn self_collisions_are_internal_and_obey_the_frictionless_closed_form() {
         }
     }
     eprintln!(
-        "self-collisions: momentum {worst_mom:.2e}, u_n after vs −e u_n {worst_un:.2e}, {failed} failed"
+        "self-collisions: momentum {worst_mom:.2e}, u_n after vs −e u_n {worst_un:.2e}, \
+         {failed} frictional ones unresolved"
+    );
+    assert!(
+        failed <= cases / 10,
+        "{failed} of {cases} frictional collisions unresolved"
     );
 }
 

@@ -827,6 +827,8 @@ mod control_tests;
 mod hybrid_tests;
 
 #[cfg(test)]
+mod self_collision_tests;
+#[cfg(test)]
 mod step_tests;
 #[cfg(test)]
 mod turning_tests;
