@@ -1,5 +1,6 @@
 //! Collisions involving links of articulated bodies (thesis §5.3): a contact on a link of a
-//! multibody against a free rigid body, a fixed body, or a link of another multibody.
+//! multibody against a free rigid body, a fixed body, a link of another multibody, or another
+//! link of the same multibody (self-collision).
 //!
 //! The collision matrix of the contact is the sum of the two sides' (eq. 5.14 for a link:
 //! three test impulses through the impulse-space articulated-body recursion of

@@ -27,7 +27,7 @@ fn multibody_energy(sim: &Simulation) -> (f64, DVec3) {
 /// What a resolved link contact changes.
 enum Outcome {
     /// Two independent sides, each with its new velocity, and its body.
-    Sides([(Owned, u32); 2]),
+    Sides(Box<[(Owned, u32); 2]>),
     /// Two links of multibody `m`: its new velocity.
     Tree { m: usize, v: Vec<f64> },
 }
@@ -130,7 +130,9 @@ impl World {
 
     /// Resolves a contact of pair `(i, j)`, at least one a link, at `x` with normal `n` (from
     /// j toward i) and separation `d`; returns whether an impulse was applied. A response that
-    /// fails is reported as a contact failure and applies nothing (the pair is checked again).
+    /// fails is reported as a contact failure and applies nothing (the pair is checked again),
+    /// except for two links of one multibody, which then get a frictionless impulse along the
+    /// normal (the rigid bodies' fallback, [`ContactKind::Fallback`], also reported).
     pub(super) fn resolve_link(&mut self, (i, j): (u32, u32), x: DVec3, n: DVec3, d: f64) -> bool {
         let (eps, gravity) = (self.collision_epsilon(), self.gravity);
         let g = gravity.length();
@@ -203,7 +205,7 @@ impl World {
         match outcome {
             Outcome::Tree { m, v } => self.set_multibody_velocity((i, j), m, &v),
             Outcome::Sides(sides) => {
-                for (side, body) in sides {
+                for (side, body) in *sides {
                     match side {
                         Owned::Link { m, v, .. } => self.set_multibody_velocity((i, j), m, &v),
                         Owned::Rigid {
@@ -248,7 +250,7 @@ impl World {
     ) -> Result<(LinkCollision, Outcome), SimError> {
         let (mut a, mut b) = (self.owned_side(i, x), self.owned_side(j, x));
         let c = collide_with(&mut a.collider(self), &mut b.collider(self), x, n, law)?;
-        Ok((c, Outcome::Sides([(a, i), (b, j)])))
+        Ok((c, Outcome::Sides(Box::new([(a, i), (b, j)]))))
     }
 
     /// A contact between links `la` (side i, the normal toward it) and `lb` of multibody `m`
