@@ -10,6 +10,7 @@ use impulse_multibody::{BaseKind, Integrator, JointPassive, JointSpec, ModelBuil
 use super::{BodyHandle, MultibodyOptions, World, WorldSettings};
 use crate::LinkShape;
 use crate::scene::{PartDesc, RotationDesc, ShapeDesc};
+use crate::sustained::ContactMode;
 
 /// ε_c of the world (m).
 const EPS: f64 = 1e-3;
@@ -120,10 +121,12 @@ fn signed_distance(w: &World, a: BodyHandle, b: BodyHandle, cache: &mut PairCach
         .map_or(0.0, |(p, _)| -p.depth)
 }
 
-/// Runs the chain with self-collision `on`: the smallest signed distance between links `a`
-/// and `c` over every frame, and the world at the end.
-fn fold(on: bool) -> (f64, World) {
-    let mut w = World::new(WorldSettings::new(EPS)).unwrap();
+/// Runs the chain with self-collision `on` in contact model `mode`: the smallest signed
+/// distance between links `a` and `c` over every frame, and the world at the end.
+fn fold(on: bool, mode: ContactMode) -> (f64, World) {
+    let mut settings = WorldSettings::new(EPS);
+    settings.contact_mode = mode;
+    let mut w = World::new(settings).unwrap();
     let (sim, shapes) = chain();
     let options = MultibodyOptions::default().with_self_collision(on);
     let h = w.add_multibody_with("chain", sim, shapes, options).unwrap();
@@ -144,13 +147,20 @@ fn fold(on: bool) -> (f64, World) {
 /// (c) With self-collision on, the last link strikes the first and never sinks into it
 /// deeper than ε_c at any frame (brute-force distance; the world's own checking monitor
 /// agrees), and comes to rest on it; with it off, the same chain folds through the first
-/// link (the option is what stops it).
+/// link (the option is what stops it). Both contact models (link pairs are impulses in
+/// both).
 #[test]
 fn a_chain_folding_onto_itself_collides_only_with_self_collision_on() {
-    let (lowest, w) = fold(true);
+    for mode in [ContactMode::Switching, ContactMode::Impulse] {
+        fold_in(mode);
+    }
+}
+
+fn fold_in(mode: ContactMode) {
+    let (lowest, w) = fold(true, mode);
     let checked = w.checked_penetration().unwrap().clone();
     eprintln!(
-        "on: lowest a–c distance {lowest:.3e} m, {} link contacts, {} unresolved, monitor {:.3e}",
+        "{mode:?}, on: lowest a–c distance {lowest:.3e} m, {} link contacts, {} unresolved, monitor {:.3e}",
         w.counters().link_contacts,
         w.counters().unresolved,
         checked.max_depth
@@ -162,9 +172,9 @@ fn a_chain_folding_onto_itself_collides_only_with_self_collision_on() {
     let (a, c) = (w.link_body(h, "a").unwrap(), w.link_body(h, "c").unwrap());
     let rest = signed_distance(&w, a, c, &mut PairCache::default());
     assert!(rest <= 2.0 * EPS, "c ends {rest:e} m above a, not on it");
-    let (lowest_off, w) = fold(false);
+    let (lowest_off, w) = fold(false, mode);
     eprintln!(
-        "off: lowest a–c distance {lowest_off:.3e} m, {} link contacts",
+        "{mode:?}, off: lowest a–c distance {lowest_off:.3e} m, {} link contacts",
         w.counters().link_contacts
     );
     assert!(
