@@ -370,6 +370,45 @@ impl ImpulseDynamics {
     }
 }
 
+impl Model {
+    /// Whether two links of this multibody are *adjacent*, the pairs that self-collision
+    /// (two links of one multibody colliding with each other) never considers:
+    ///
+    /// - a link with itself;
+    /// - two links welded into one rigid body by a chain of fixed joints (both welded to the
+    ///   ground included);
+    /// - two links whose rigid bodies are joined by one moving joint, parent and child
+    ///   (under a fixed base, a link welded to the ground and a body jointed to the ground
+    ///   too).
+    ///
+    /// Every other pair (siblings, grandparent and grandchild, …) is not adjacent.
+    ///
+    /// # Errors
+    /// [`MultibodyError::UnknownName`] for a link id outside the model.
+    pub fn links_adjacent(&self, a: LinkId, b: LinkId) -> Result<bool, MultibodyError> {
+        let body = |l: LinkId| {
+            self.links
+                .get(l.0)
+                .map(|info| info.body)
+                .ok_or_else(|| MultibodyError::UnknownName {
+                    kind: "link",
+                    name: l.0.to_string(),
+                })
+        };
+        let (ba, bb) = (body(a)?, body(b)?);
+        // The parent of a body, as a link's body is given: `None` is the ground.
+        let parent = |x: usize| self.bodies[x].parent;
+        Ok(match (ba, bb) {
+            (x, y) if x == y => true,
+            (Some(x), Some(y)) => parent(x) == Some(y) || parent(y) == Some(x),
+            // The ground and a body: adjacent when the body is jointed to the ground (never
+            // a floating base, which has no joint).
+            (None, Some(x)) | (Some(x), None) => !self.is_floating() && parent(x).is_none(),
+            (None, None) => true,
+        })
+    }
+}
+
 #[inline]
 fn axis_times(joint: BodyJoint, ia: &Sym6) -> Wrench {
     match joint {

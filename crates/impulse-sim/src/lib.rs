@@ -41,7 +41,8 @@
 //! - recording at a fixed frame rate, trajectory hashes, CSV and JSON ([`record`]);
 //! - collisions of multibody links with rigid bodies, fixed bodies and other multibodies'
 //!   links (thesis §5.3: K from the impulse-space articulated-body recursion, the impulse from
-//!   `impulse-response`, propagation through the tree) ([`articulated`]); multibodies as
+//!   `impulse-response`, propagation through the tree), and, as an option off by default,
+//!   between non-adjacent links of one multibody ([`articulated`]); multibodies as
 //!   members of a [`World`] (`World::add_multibody`, `multibodies` in scene files, inline or
 //!   from URDF files: integrated to the heap's top with checked predictions, thesis §5.2);
 //! - high-level controllers called at their own rate with the world to read and commands to
@@ -74,8 +75,8 @@ pub use scene::{Scene, SceneDesc};
 pub use sustained::{ContactMode, SustainedSettings};
 pub use world::{
     BodyHandle, BodyState, ContactEvent, ContactFailure, Control, ControllerHandle, Counters,
-    LinkShape, Load, LoadFn, Material, MultibodyHandle, Profile, StepReport, World,
-    WorldController, WorldSettings,
+    LinkShape, Load, LoadFn, Material, MultibodyHandle, MultibodyOptions, Profile, StepReport,
+    World, WorldController, WorldSettings,
 };
 
 #[cfg(test)]

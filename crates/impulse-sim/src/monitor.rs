@@ -64,8 +64,8 @@ impl PenetrationMonitor {
     }
 
     /// Measures every close pair of the world now: pairs with at least one dynamic body or
-    /// multibody link (not two links of one multibody) whose tight boxes, grown by ε_c,
-    /// overlap.
+    /// multibody link (two links of one multibody only when they can collide: its
+    /// self-collision on, not adjacent) whose tight boxes, grown by ε_c, overlap.
     pub fn sample(&mut self, world: &World) {
         let bodies: Vec<_> = world.bodies().collect();
         let eps = world.collision_epsilon();
@@ -76,8 +76,9 @@ impl PenetrationMonitor {
         self.report.samples += 1;
         for (i, j) in close_pairs(&boxes) {
             let ((ha, a), (hb, b)) = (bodies[i as usize], bodies[j as usize]);
-            let same_multibody = matches!((a.link, b.link), (Some((x, _)), Some((y, _))) if x == y);
-            if !(a.takes_impulses() || b.takes_impulses()) || same_multibody {
+            let never =
+                matches!((a.link, b.link), (Some(x), Some(y)) if !world.links_collide(x, y));
+            if !(a.takes_impulses() || b.takes_impulses()) || never {
                 continue;
             }
             self.report.pairs_measured += 1;

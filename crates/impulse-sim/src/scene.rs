@@ -756,9 +756,16 @@ pub fn check_frames(duration: f64, rate: f64) -> Result<(), String> {
     Ok(())
 }
 
-/// RON's message, plus how to write the value it choked on when that is a rotation.
+/// RON's message, with the multibody it is in, plus how to write the value it choked on
+/// when that is a rotation.
 fn with_hint(text: &str, e: &ron::error::SpannedError) -> String {
     let mut message = e.to_string();
+    if let Some(at) = multibody::enclosing_multibody(text, e.span.start.line, e.span.start.col) {
+        message.push_str(&match at.field {
+            Some(field) => format!(" (in multibody \"{}\", field `{field}`)", at.name),
+            None => format!(" (in multibody \"{}\")", at.name),
+        });
+    }
     let line = text
         .lines()
         .nth(e.span.start.line.saturating_sub(1))

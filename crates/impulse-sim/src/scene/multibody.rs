@@ -18,6 +18,10 @@
 //! )
 //! ```
 //!
+//! `self_collision: true` makes its links collide with each other, except adjacent ones (two
+//! links welded together by fixed joints, and the parent and child of each moving joint);
+//! off by default ([`MultibodyDesc::self_collision`], `docs/hybrid.md`).
+//!
 //! Or from a URDF file with overrides ([`UrdfDesc`], `docs/urdf.md`):
 //!
 //! ```ron
@@ -248,6 +252,12 @@ pub struct MultibodyDesc {
     /// Relative error tolerance of the adaptive RK4 integrator per step. Default `1e-9`.
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
+    /// Whether its links collide with each other (self-collision), adjacent links excepted:
+    /// two links welded into one rigid body by fixed joints, and the parent and child of
+    /// every moving joint never do (`impulse_multibody::Model::links_adjacent`). Default
+    /// `false`: links of one multibody never collide.
+    #[serde(default)]
+    pub self_collision: bool,
 }
 
 fn default_tolerance() -> f64 {
@@ -637,6 +647,161 @@ fn link_mass(
         }
     };
     Ok((inertia, placed))
+}
+
+/// Where in a multibody description of a scene's RON text a parse error was found.
+#[derive(Debug, PartialEq, Eq)]
+pub(crate) struct MultibodyAt {
+    /// The multibody's name.
+    pub name: String,
+    /// The field of its own whose value the error is in (`None` when it is not in one: a
+    /// misspelt field's name).
+    pub field: Option<String>,
+}
+
+/// The multibody description, `Multibody(…)`, of a scene's RON `text` that encloses
+/// 1-based `line` and `col` (characters), where a parse error was found, so that the error
+/// names it: `None` outside any, or for a multibody without a `name`. A small scan of RON's
+/// brackets, strings and comments.
+pub(crate) fn enclosing_multibody(text: &str, line: usize, col: usize) -> Option<MultibodyAt> {
+    let at = text
+        .split_inclusive('\n')
+        .take(line.saturating_sub(1))
+        .map(str::len)
+        .sum::<usize>()
+        + text
+            .split_inclusive('\n')
+            .nth(line.saturating_sub(1))
+            .map_or(0, |l| {
+                l.char_indices()
+                    .nth(col.saturating_sub(1))
+                    .map_or(l.len(), |(i, _)| i)
+            });
+    // Open brackets: whether each opens a `Multibody(`, and where its contents start.
+    let mut open: Vec<Option<usize>> = Vec::new();
+    scan(text, |i, token| {
+        if i >= at {
+            return false;
+        }
+        match token {
+            Token::Open(ident) => open.push((ident == "Multibody").then_some(i + 1)),
+            Token::Close => {
+                open.pop();
+            }
+            Token::Other(_) | Token::Str(_) => {}
+        }
+        true
+    });
+    // The innermost open one where the scan stopped (at the error, or at the end of a text
+    // that ends inside it).
+    let start = open.iter().rev().find_map(|o| *o)?;
+    // Its `name: "…"` and the field the error is in, among its own fields (depth 0 here).
+    let (mut depth, mut name, mut field) = (0usize, None, None);
+    let mut key: (&str, bool) = ("", false);
+    scan(&text[start..], |i, token| {
+        match token {
+            Token::Open(_) => depth += 1,
+            Token::Close if depth == 0 => return false,
+            Token::Close => depth -= 1,
+            Token::Other(":") if depth == 0 && !key.0.is_empty() => {
+                key.1 = true;
+                if start + i < at {
+                    field = Some(key.0.to_owned());
+                }
+            }
+            // A field's value ends at the next comma of its level.
+            Token::Other(",") if depth == 0 && start + i < at => {
+                field = None;
+                key = ("", false);
+            }
+            Token::Str(s) if depth == 0 && key == ("name", true) => name = Some(s.to_owned()),
+            Token::Other(t) if t.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') => {
+                key = (t, false);
+            }
+            Token::Other(_) | Token::Str(_) => key = ("", false),
+        }
+        true
+    });
+    Some(MultibodyAt { name: name?, field })
+}
+
+/// A token of [`scan`].
+enum Token<'a> {
+    /// `(`, `[` or `{`, with the identifier just before it (or "").
+    Open(&'a str),
+    /// `)`, `]` or `}`.
+    Close,
+    /// A string's contents (escapes left as written).
+    Str(&'a str),
+    /// An identifier, a number or another character.
+    Other(&'a str),
+}
+
+/// Calls `f` with the byte offset and token of each token of RON `text` (comments skipped)
+/// while it returns `true`.
+fn scan<'a>(text: &'a str, mut f: impl FnMut(usize, Token<'a>) -> bool) {
+    let bytes = text.as_bytes();
+    let (mut i, mut ident): (usize, &str) = (0, "");
+    while i < bytes.len() {
+        let c = bytes[i];
+        let token_start = i;
+        let token = match c {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                i = text[i..].find('\n').map_or(bytes.len(), |n| i + n);
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i = text[i + 2..]
+                    .find("*/")
+                    .map_or(bytes.len(), |n| i + 2 + n + 2);
+                continue;
+            }
+            b'"' => {
+                let mut j = i + 1;
+                while j < bytes.len() && bytes[j] != b'"' {
+                    j += if bytes[j] == b'\\' { 2 } else { 1 };
+                }
+                let s = &text[i + 1..j.min(bytes.len())];
+                i = j + 1;
+                Token::Str(s)
+            }
+            b'(' | b'[' | b'{' => {
+                i += 1;
+                Token::Open(std::mem::take(&mut ident))
+            }
+            b')' | b']' | b'}' => {
+                i += 1;
+                Token::Close
+            }
+            c if c.is_ascii_whitespace() => {
+                i += 1;
+                continue;
+            }
+            c if c.is_ascii_alphanumeric() || c == b'_' => {
+                let mut j = i;
+                while j < bytes.len() && (bytes[j].is_ascii_alphanumeric() || bytes[j] == b'_') {
+                    j += 1;
+                }
+                i = j;
+                ident = &text[token_start..j];
+                if !f(token_start, Token::Other(ident)) {
+                    return;
+                }
+                continue;
+            }
+            _ => {
+                let len = text[i..].chars().next().map_or(1, char::len_utf8);
+                i += len;
+                Token::Other(&text[token_start..i])
+            }
+        };
+        if !matches!(token, Token::Open(_)) {
+            ident = "";
+        }
+        if !f(token_start, token) {
+            return;
+        }
+    }
 }
 
 #[cfg(test)]

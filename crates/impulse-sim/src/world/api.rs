@@ -182,14 +182,14 @@ impl World {
             .collect();
         for (i, j) in close_pairs(&boxes) {
             let (i, j) = (i as usize, j as usize);
-            let same_multibody =
-                matches!((all[i].link, all[j].link), (Some((a, _)), Some((b, _))) if a == b);
-            if j < old.len()
-                || !(all[i].takes_impulses() || all[j].takes_impulses())
-                || same_multibody
-            {
+            let never = matches!(
+                (all[i].link, all[j].link),
+                (Some(a), Some(b)) if !self.links_collide(a, b)
+            );
+            if j < old.len() || !(all[i].takes_impulses() || all[j].takes_impulses()) || never {
                 // Two old bodies, or two that never collide (fixed walls may overlap; links of
-                // one multibody touch at their joints).
+                // one multibody touch at their joints, and collide only with its
+                // self-collision on and not adjacent).
                 continue;
             }
             refuse_overlap(all[i], all[j], eps)?;

@@ -19,9 +19,17 @@
 //!   code as rigid bodies, microcollisions included), propagated through the tree
 //!   ([`crate::articulated`]).
 //!
-//! Links of one multibody do not collide with each other (self-collision is not supported).
-//! Contacts of links are always impulses: the switching model never holds a pair with a link
-//! (resting links are microcollisions, the thesis's pure model).
+//! **Self-collision** is an option of each multibody ([`MultibodyOptions::self_collision`],
+//! `self_collision: true` in a scene file), off by default: links of one multibody then
+//! collide with each other, except adjacent ones ([`impulse_multibody::Model::links_adjacent`]:
+//! links welded into one rigid body by fixed joints, and the two rigid bodies of every moving
+//! joint, parent and child). Two links of one tree share one velocity vector, so their
+//! collision matrix is the relative one, `K = (J₁ − J₂) M⁻¹ (J₁ − J₂)ᵀ`, not a sum
+//! ([`crate::articulated::collide_self`]). Off, no pair of one multibody's links is ever
+//! considered: neither the event loop nor the penetration monitor looks at them.
+//!
+//! Contacts of links are always impulses in the event loop (resting links are
+//! microcollisions, the thesis's pure model).
 
 use crate::scene::ShapeDesc;
 use impulse_collide::motion::LinkMotion;
@@ -55,6 +63,25 @@ pub struct LinkShape {
     pub material: String,
 }
 
+/// How a multibody takes part in the world, beyond its simulation and shapes
+/// ([`World::add_multibody_with`]). The default is what [`World::add_multibody`] uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MultibodyOptions {
+    /// Whether its links collide with each other (self-collision), adjacent links excepted
+    /// ([`impulse_multibody::Model::links_adjacent`]: welded into one rigid body, or parent
+    /// and child of a moving joint). Default `false`: links of one multibody never collide.
+    pub self_collision: bool,
+}
+
+impl MultibodyOptions {
+    /// These options with self-collision on or off.
+    #[must_use]
+    pub fn with_self_collision(mut self, on: bool) -> Self {
+        self.self_collision = on;
+        self
+    }
+}
+
 /// A multibody in the world.
 #[derive(Clone)]
 pub(crate) struct Member {
@@ -64,6 +91,8 @@ pub(crate) struct Member {
     pub(crate) offset: f64,
     /// The links with shapes, and their bodies' slots.
     pub(crate) links: Vec<(LinkId, u32)>,
+    /// Whether its non-adjacent links collide with each other.
+    pub(crate) self_collision: bool,
 }
 
 impl Member {
@@ -96,8 +125,24 @@ impl World {
     pub fn add_multibody(
         &mut self,
         name: &str,
+        sim: Simulation,
+        shapes: Vec<LinkShape>,
+    ) -> Result<MultibodyHandle, SimError> {
+        self.add_multibody_with(name, sim, shapes, MultibodyOptions::default())
+    }
+
+    /// [`World::add_multibody`] with options: with [`MultibodyOptions::self_collision`], its
+    /// non-adjacent links collide with each other, and two of them overlapping by more than
+    /// ε_c at the start are refused as any two bodies are.
+    ///
+    /// # Errors
+    /// As [`World::add_multibody`].
+    pub fn add_multibody_with(
+        &mut self,
+        name: &str,
         mut sim: Simulation,
         shapes: Vec<LinkShape>,
+        options: MultibodyOptions,
     ) -> Result<MultibodyHandle, SimError> {
         let what = format!("multibody \"{name}\"");
         if name.is_empty() || self.multibodies.iter().any(|m| m.name == name) {
@@ -154,13 +199,28 @@ impl World {
             links.push((id, 0));
             bodies.push(body);
         }
-        self.check_overlaps(&bodies)?;
+        sim.set_tracking(true);
+        // The member first: which of its link pairs matter (overlaps, new close pairs) depends
+        // on it. Removed again on error.
+        self.multibodies.push(Member {
+            name: name.to_owned(),
+            sim,
+            offset: self.time,
+            links: Vec::new(),
+            self_collision: options.self_collision,
+        });
+        if let Err(e) = self.check_overlaps(&bodies) {
+            self.multibodies.pop();
+            return Err(e);
+        }
         let old = (self.materials.clone(), self.hash.clone());
         self.materials = materials;
         let ids: Vec<u32> = bodies.into_iter().map(|b| self.insert(b)).collect();
         for (l, &i) in links.iter_mut().zip(&ids) {
             l.1 = i;
         }
+        let m = self.multibodies.len() - 1;
+        self.multibodies[m].links = links;
         if let Err(e) = self
             .sync_broadphase(&ids)
             .and_then(|()| self.promote_new_pairs())
@@ -169,16 +229,32 @@ impl World {
                 self.unregister(i);
             }
             (self.materials, self.hash) = old;
+            self.multibodies.pop();
             return Err(e);
         }
-        sim.set_tracking(true);
-        self.multibodies.push(Member {
-            name: name.to_owned(),
-            sim,
-            offset: self.time,
-            links,
-        });
-        Ok(MultibodyHandle(self.multibodies.len() as u32 - 1))
+        Ok(MultibodyHandle(m as u32))
+    }
+
+    /// Whether a multibody's non-adjacent links collide with each other
+    /// ([`MultibodyOptions::self_collision`]).
+    #[must_use]
+    pub fn self_collision(&self, h: MultibodyHandle) -> Option<bool> {
+        self.multibodies.get(h.0 as usize).map(|m| m.self_collision)
+    }
+
+    /// Whether two link bodies (their multibodies and links, as [`Body::link`] gives them)
+    /// can ever collide: links of two multibodies always; links of one multibody only with
+    /// its self-collision on and when they are not adjacent
+    /// ([`impulse_multibody::Model::links_adjacent`]).
+    pub(crate) fn links_collide(&self, (ma, la): (u32, LinkId), (mb, lb): (u32, LinkId)) -> bool {
+        if ma != mb {
+            return true;
+        }
+        let Some(m) = self.multibodies.get(ma as usize) else {
+            return false;
+        };
+        // An id outside the model names no link of it: nothing to collide.
+        m.self_collision && matches!(m.sim.model().links_adjacent(la, lb), Ok(false))
     }
 
     /// The multibodies' handles, in the order they were added.

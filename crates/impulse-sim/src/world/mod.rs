@@ -65,7 +65,7 @@ use rustc_hash::FxHashMap;
 
 pub use api::{Load, LoadFn};
 pub use control::{Control, ControllerHandle, WorldController, WorldControllerClone};
-pub use hybrid::{LinkShape, MultibodyHandle};
+pub use hybrid::{LinkShape, MultibodyHandle, MultibodyOptions};
 pub use hybrid_step::{
     BOX_STAGE_FRACTION, BOX_STAGE_MAX_FRACTION, MAX_STEP_REDOS, SLACK_ROUNDING_REL,
 };
@@ -575,7 +575,8 @@ impl World {
         world.add_bodies(&desc.bodies)?;
         for m in &desc.multibodies {
             let (sim, shapes) = m.build(world.gravity, &scene.base_dir)?;
-            world.add_multibody(&m.name, sim, shapes)?;
+            let options = MultibodyOptions::default().with_self_collision(m.self_collision);
+            world.add_multibody_with(&m.name, sim, shapes, options)?;
         }
         for c in &desc.controllers {
             c.add_to(&mut world)?;
@@ -809,9 +810,10 @@ impl World {
     /// Whether the pair can ever need a collision (at least one body is dynamic).
     fn pair_matters(&self, a: u32, b: u32) -> bool {
         let (ba, bb) = (self.b(a), self.b(b));
-        if let (Some((ma, _)), Some((mb, _))) = (ba.link, bb.link) {
-            // Links of one multibody do not collide (no self-collision).
-            return ma != mb;
+        if let (Some(la), Some(lb)) = (ba.link, bb.link) {
+            // Links of one multibody collide only with its self-collision on, and never
+            // adjacent ones.
+            return self.links_collide(la, lb);
         }
         ba.takes_impulses() || bb.takes_impulses()
     }
@@ -825,6 +827,8 @@ mod control_tests;
 #[cfg(test)]
 mod hybrid_tests;
 
+#[cfg(test)]
+mod self_collision_tests;
 #[cfg(test)]
 mod step_tests;
 #[cfg(test)]

@@ -118,3 +118,65 @@ fn a_urdf_multibody_in_a_scene_file_is_checked_for_controller_stability() {
         "{warnings:?}"
     );
 }
+
+/// A scene with one three-link chain (`a`, `b`, `c`, the last two free) whose multibody
+/// fields end with `extra`.
+fn chain_scene(extra: &str) -> String {
+    format!(
+        r#"Scene(
+            bodies: [Body(name: "floor", motion: Fixed, shape: Box(half_extents: (1, 1, 0.1)),
+                          position: (0, 0, -0.1))],
+            multibodies: [
+                Multibody(name: "other", position: (0.5, 0, 1), links: [Link(name: "x")]),
+                Multibody(name: "chain", base: Fixed, position: (0, 0, 1), links: [
+                    Link(name: "a", shape: Some(Box(half_extents: (0.1, 0.02, 0.02))),
+                         position: (0.1, 0, 0)),
+                    Link(name: "b", shape: Some(Box(half_extents: (0.1, 0.02, 0.02))),
+                         position: (0.1, 0, 0)),
+                    Link(name: "c", shape: Some(Box(half_extents: (0.1, 0.02, 0.02))),
+                         position: (0.1, 0, 0)),
+                ], joints: [
+                    Joint(name: "jb", kind: Revolute, parent: "a", child: "b",
+                          position: (0.2, 0, 0), axis: (0, 1, 0)),
+                    Joint(name: "jc", kind: Revolute, parent: "b", child: "c",
+                          position: (0.2, 0, 0), axis: (0, 1, 0)),
+                ]{extra}),
+            ],
+        )"#
+    )
+}
+
+/// (d) `self_collision` in a scene file: off when left out, on when written `true`, and it
+/// reaches the world (the multibody's option); a malformed value or a misspelt field is a
+/// parse error naming the multibody (and not a neighbouring one).
+#[test]
+fn self_collision_parses_defaults_to_off_and_names_the_multibody_when_malformed() {
+    let read = |extra: &str| SceneDesc::from_ron(&chain_scene(extra), "test");
+    let world = |desc: SceneDesc| {
+        let w = crate::World::from_scene(&crate::Scene::new(desc, ".")).unwrap();
+        let h = w.multibody_handle("chain").unwrap();
+        w.self_collision(h).unwrap()
+    };
+    let off = read("").unwrap();
+    assert!(!off.multibodies[1].self_collision);
+    assert!(!world(off));
+    let on = read(", self_collision: true").unwrap();
+    assert!(on.multibodies[1].self_collision);
+    assert!(world(on));
+    assert!(!world(read(", self_collision: false").unwrap()));
+    for bad in [
+        ", self_collision: 1",
+        ", self_collision: \"yes\"",
+        ", self_colision: true",
+    ] {
+        let err = read(bad).expect_err(bad).to_string();
+        assert!(
+            err.contains("multibody \"chain\"") && !err.contains("\"other\""),
+            "{bad}: {err}"
+        );
+        assert!(
+            err.contains("field `self_collision`") != bad.contains("colision"),
+            "{bad}: {err}"
+        );
+    }
+}
