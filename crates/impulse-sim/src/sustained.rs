@@ -73,6 +73,9 @@
 //!   bodies are fixed until something touches them, the program changes them, or an awake
 //!   body's held pair joins them to an awake island. Waking is exact: a sleeping body is at
 //!   rest, so it resumes from the state it slept in.
+//! - **Multibody links** are held like rigid bodies, each multibody with a held link one
+//!   jointed system of its island, its contact impulses held as joint forces over the step
+//!   (`world/held_links.rs`, `docs/hybrid.md`); such an island neither rests nor sleeps.
 //!
 //! **Must not know** how collisions are resolved (chapter 3, `crate::contact`) or scene files.
 

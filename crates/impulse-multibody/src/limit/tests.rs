@@ -258,7 +258,11 @@ fn run_until_strike_stops_at_each_strike_with_it_resolved() {
     let at = sim.run_until_strike(1.0).unwrap();
     assert!((at - t_hit).abs() < 1e-9, "{at} vs {t_hit}");
     let v_hit = (2.0 * G * h).sqrt();
-    assert!((sim.v()[0] - e * v_hit).abs() < 1e-6 * v_hit, "{}", sim.v()[0]);
+    assert!(
+        (sim.v()[0] - e * v_hit).abs() < 1e-6 * v_hit,
+        "{}",
+        sim.v()[0]
+    );
     // The bounce: up and down again in 2·e·v/g.
     let next = sim.run_until_strike(1.0).unwrap();
     assert!((next - at - 2.0 * e * v_hit / G).abs() < 1e-8, "{next}");

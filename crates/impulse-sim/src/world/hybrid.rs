@@ -28,8 +28,9 @@
 //! ([`crate::articulated::collide_self`]). Off, no pair of one multibody's links is ever
 //! considered: neither the event loop nor the penetration monitor looks at them.
 //!
-//! Contacts of links are always impulses in the event loop (resting links are
-//! microcollisions, the thesis's pure model).
+//! A link's collisions are impulses in the event loop; in the switching contact model its
+//! slow contacts are held in contact islands with its multibody as one jointed system
+//! (`held_links.rs`), in the pure impulse model they are microcollisions (the thesis's).
 
 use crate::scene::ShapeDesc;
 use impulse_collide::motion::LinkMotion;
