@@ -388,32 +388,9 @@ fn random_islands_obey_complementarity_coulomb_and_dissipation() {
         for c in &contacts {
             let row = prepare_row(&bodies, &[], &vec![None; bodies.len()], c).unwrap();
             let u = contact_velocity(&bodies, c, &row);
-            let p = c.impulse;
-            let scale = 1e-7 * (1.0 + u.length());
-            assert!(p.z >= 0.0 && u.z >= -scale, "case {case}: p {p:?} u {u:?}");
-            assert!(
-                p.z * u.z <= scale * p.z.max(1e-12),
-                "case {case}: p {p:?} u {u:?}"
-            );
-            let (p_t, u_t) = (DVec2::new(p.x, p.y), DVec2::new(u.x, u.y));
-            assert!(
-                p_t.length() <= c.friction * p.z * (1.0 + 1e-12) + 1e-15,
-                "case {case}"
-            );
-            if u_t.length() > 1e-6 && p.z > 1e-9 {
-                sliding += 1;
-                let coulomb = -c.friction * p.z * u_t / u_t.length();
-                assert!(
-                    (p_t - coulomb).length() <= 1e-6 * c.friction * p.z + 1e-12,
-                    "case {case}: p_t {p_t:?} vs Coulomb {coulomb:?}"
-                );
-            } else if p.z > 1e-9 && p_t.length() < c.friction * p.z * (1.0 - 1e-6) {
-                sticking += 1;
-                assert!(
-                    u_t.length() < 1e-7,
-                    "case {case}: sticking with u_t {u_t:?}"
-                );
-            }
+            let (slides, sticks) = check_laws(case, c, u);
+            sliding += usize::from(slides);
+            sticking += usize::from(sticks);
         }
     }
     eprintln!("{converged}/500 converged; {sliding} sliding, {sticking} sticking contacts");
@@ -786,5 +763,40 @@ fn a_moving_fixed_body_carries_a_sticking_box_and_is_not_moved() {
             - (platform.velocity + platform.omega.cross(c.point - platform.com));
         assert!(u.length() < 1e-9, "corner {:?} slips at {u:?}", c.point);
         assert!(c.impulse.z > 0.0, "every corner presses");
+    }
+}
+
+/// Asserts a solved contact's laws from its relative velocity `u` (contact frame, after the
+/// solve): p_n ≥ 0 and u_n ≥ 0 with p_n·u_n = 0, ‖p_t‖ ≤ μ p_n, sliding friction opposite to
+/// the slip on the disk's rim (Coulomb, maximal dissipation), no slip where it sticks inside.
+/// Returns whether it slides and whether it sticks (for counting).
+pub(super) fn check_laws(case: usize, c: &Contact, u: DVec3) -> (bool, bool) {
+    let p = c.impulse;
+    let scale = 1e-7 * (1.0 + u.length());
+    assert!(p.z >= 0.0 && u.z >= -scale, "case {case}: p {p:?} u {u:?}");
+    assert!(
+        p.z * u.z <= scale * p.z.max(1e-12),
+        "case {case}: p {p:?} u {u:?}"
+    );
+    let (p_t, u_t) = (DVec2::new(p.x, p.y), DVec2::new(u.x, u.y));
+    assert!(
+        p_t.length() <= c.friction * p.z * (1.0 + 1e-12) + 1e-15,
+        "case {case}"
+    );
+    if u_t.length() > 1e-6 && p.z > 1e-9 {
+        let coulomb = -c.friction * p.z * u_t / u_t.length();
+        assert!(
+            (p_t - coulomb).length() <= 1e-6 * c.friction * p.z + 1e-12,
+            "case {case}: p_t {p_t:?} vs Coulomb {coulomb:?}"
+        );
+        (true, false)
+    } else if p.z > 1e-9 && p_t.length() < c.friction * p.z * (1.0 - 1e-6) {
+        assert!(
+            u_t.length() < 1e-7,
+            "case {case}: sticking with u_t {u_t:?}"
+        );
+        (false, true)
+    } else {
+        (false, false)
     }
 }

@@ -556,6 +556,15 @@ fn hybrid_runs_do_not_depend_on_the_thread_count() {
     assert_eq!(run(1), run(2));
 }
 
+/// The bundled rover (`fixtures/scenes/rover.ron`) with its blocks taken away.
+fn bundled_rover_alone() -> crate::Scene {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/scenes/rover.ron");
+    let mut scene = crate::Scene::read(&path).expect("the bundled rover");
+    scene.desc.bodies.retain(|b| !b.name.starts_with("block"));
+    scene
+}
+
 /// Wheels' rolling speed agrees with the command within this fraction (rolling without
 /// slip on a floor, the loops' steady-state error under rolling resistance).
 const ROLLING_REL: f64 = 0.01;
@@ -567,10 +576,7 @@ const ROLLING_REL: f64 = 0.01;
 /// [`MAX_ROVER_REDOS`] redone steps.
 #[test]
 fn a_rover_driven_by_its_wheel_loops_rolls_at_their_speed() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/scenes/rover.ron");
-    let mut scene = crate::Scene::read(&path).expect("the bundled rover");
-    scene.desc.bodies.retain(|b| !b.name.starts_with("block"));
+    let mut scene = bundled_rover_alone();
     let omega = 5.0;
     let mb = &mut scene.desc.multibodies[0];
     for c in &mut mb.controllers {
@@ -653,10 +659,7 @@ const ROVER_STANDING_DRIFT: f64 = 2.0;
 /// microcollisions), with no redone step.
 #[test]
 fn a_rover_standing_on_the_floor_stays_at_rest() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/scenes/rover.ron");
-    let mut scene = crate::Scene::read(&path).expect("the bundled rover");
-    scene.desc.bodies.retain(|b| !b.name.starts_with("block"));
+    let scene = bundled_rover_alone();
     let mut w = World::from_scene(&scene).expect("valid");
     w.set_checking(true);
     let eps = w.collision_epsilon();
