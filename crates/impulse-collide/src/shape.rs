@@ -16,6 +16,11 @@ use crate::feature::{Closest, Feature, FeaturePair};
 use crate::gjk::{self, SupportBody};
 use crate::{point, vclip};
 
+/// Relative difference below which two semi-axes of an ellipsoid count as equal, making it a
+/// solid of revolution ([`Shape::symmetry_axis`]): rounding of axes given equal. Default
+/// `1e-12`.
+pub const REVOLUTION_REL: f64 = 1e-12;
+
 /// A convex piece: an exact sphere or ellipsoid (centred on its frame's origin) or a convex
 /// polyhedron.
 #[derive(Clone, Debug)]
@@ -183,6 +188,30 @@ impl Shape {
             Convex::Sphere(_) => local.length(),
             c => c.radius_about(local),
         })
+    }
+
+    /// The symmetry axis of piece `index` when it is a solid of revolution other than a
+    /// sphere (an ellipsoid with two equal semi-axes, to [`REVOLUTION_REL`]): the axis (unit,
+    /// body frame) and a point on it (the piece's centre, body frame). Turning about that
+    /// axis leaves the piece the same set, so it moves nothing the piece can touch: a wheel
+    /// rolling turns about it. `None` for any other piece, or an index out of range.
+    pub fn symmetry_axis(&self, index: usize) -> Option<(DVec3, DVec3)> {
+        let p = self.pieces.get(index)?;
+        let Convex::Ellipsoid(e) = &p.convex else {
+            return None;
+        };
+        let s = e.semi_axes();
+        let same = |a: f64, b: f64| (a - b).abs() <= REVOLUTION_REL * a.max(b);
+        let local = if same(s.x, s.y) && !same(s.y, s.z) {
+            DVec3::Z
+        } else if same(s.y, s.z) && !same(s.z, s.x) {
+            DVec3::X
+        } else if same(s.z, s.x) && !same(s.x, s.y) {
+            DVec3::Y
+        } else {
+            return None;
+        };
+        Some((p.pose.rotation * local, p.pose.translation))
     }
 
     /// Radius of the smallest sphere about `center` (body frame) containing the shape: r_max

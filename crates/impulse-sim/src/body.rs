@@ -119,6 +119,10 @@ pub struct Body {
     /// rotational term of a time-of-impact bound; zero for a ball about its centre of mass,
     /// see [`Shape::rotational_reach`]).
     pub reach: Vec<f64>,
+    /// Per piece that is a solid of revolution ([`Shape::symmetry_axis`]): its axis (unit,
+    /// body frame) and the distance of that axis from the centre of mass, for
+    /// [`Body::surface_speed`].
+    pub revolution: Vec<Option<(DVec3, f64)>>,
     /// Index of the body's material in the world's material table.
     pub material: usize,
     /// The prescribed motion of a scripted body, re-based at the current time.
@@ -154,6 +158,13 @@ impl Body {
         let reach = (0..shape.pieces().len())
             .map(|i| shape.rotational_reach(i, DVec3::ZERO).unwrap_or(r_max))
             .collect();
+        let revolution = (0..shape.pieces().len())
+            .map(|i| {
+                shape
+                    .symmetry_axis(i)
+                    .map(|(axis, at)| (axis, (at - axis * at.dot(axis)).length()))
+            })
+            .collect();
         Self {
             name,
             shape: Arc::new(shape),
@@ -167,6 +178,7 @@ impl Body {
             mass,
             r_max,
             reach,
+            revolution,
             material,
             script,
             step_hint: 0.0,
@@ -201,6 +213,35 @@ impl Body {
     #[must_use]
     pub fn pose_of(&self, state: &crate::world::BodyState) -> Pose {
         Pose::new(state.rotation, state.position) * self.frame.inverse()
+    }
+
+    /// How fast turning at `omega` (world) can move the body's surface toward anything: over
+    /// its pieces, the largest ‖ω‖·r (r the piece's [`Body::reach`]), except that a solid of
+    /// revolution turning about its own axis moves nothing (it stays the same set): split ω
+    /// into ω∥ along the piece's axis and ω⊥ across it, the piece's surface moves at most
+    /// ‖ω⊥‖·r plus |ω∥| times the axis's distance from the centre of mass (that turn carries
+    /// the axis round). A wheel rolling turns about its axle: its surface does not approach
+    /// the floor.
+    #[must_use]
+    pub fn surface_speed(&self, omega: DVec3) -> f64 {
+        self.reach
+            .iter()
+            .zip(&self.revolution)
+            .map(|(&r, rev)| match rev {
+                None => omega.length() * r,
+                Some((axis, offset)) => {
+                    let (along, across) = self.split_spin(omega, *axis);
+                    across * r + along * offset
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// |ω∥| and ‖ω⊥‖ of `omega` (world) about the body-frame axis `axis`.
+    fn split_spin(&self, omega: DVec3, axis: DVec3) -> (f64, f64) {
+        let a = self.pose.rotation * axis;
+        let along = omega.dot(a);
+        (along.abs(), (omega - a * along).length())
     }
 
     /// The largest rotational reach over the pieces (≤ r_max).
@@ -647,5 +688,113 @@ mod tests {
         b.apply_impulse(p, x);
         assert!((b.linear_momentum() - p0 - p).length() < 1e-14);
         assert!((b.angular_momentum() - l0 - x.cross(p)).length() < 1e-12);
+    }
+
+    /// The surface speed of a body whose pieces are an ellipsoid of revolution (its centre off
+    /// the centre of mass, turned) and a three-axis ellipsoid bounds the rate at which its
+    /// support function h(d) = max d·x over the shape changes under turning at ω, measured
+    /// by turning the body through ω·dt (finite differences over 64 directions), for random
+    /// ω; and turning about the wheel's own axis through its centre moves nothing but the
+    /// offset: the bound is |ω∥|·d there.
+    #[test]
+    fn surface_speed_bounds_how_fast_the_support_moves() {
+        use impulse_collide::shape::Convex;
+        use impulse_geom::Ellipsoid;
+        let wheel_pose = Pose::new(
+            DQuat::from_rotation_x(1.1) * DQuat::from_rotation_z(0.4),
+            DVec3::new(0.03, -0.01, 0.02),
+        );
+        let shape = Shape::compound(vec![(
+            wheel_pose,
+            Convex::Ellipsoid(Ellipsoid::new(DVec3::new(0.06, 0.06, 0.02)).unwrap()),
+        )])
+        .unwrap();
+        let pose = Pose::from_rotation(DQuat::from_rotation_y(0.7));
+        let body = Body::new(
+            "wheel".into(),
+            shape.clone(),
+            BodyKind::Dynamic,
+            pose,
+            DVec3::ZERO,
+            DVec3::ZERO,
+            None,
+            0,
+            None,
+        );
+        assert!(body.revolution[0].is_some());
+        let support = |pose: &Pose, d: DVec3| -> f64 {
+            shape
+                .pieces()
+                .iter()
+                .map(|p| {
+                    let world = *pose * p.pose;
+                    let local = world.rotation.inverse() * d;
+                    let x = match &p.convex {
+                        Convex::Ellipsoid(e) => e.support(local),
+                        _ => unreachable!("ellipsoids only"),
+                    };
+                    d.dot(world.transform_point(x))
+                })
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
+        let dirs: Vec<DVec3> = (0..64)
+            .map(|k| {
+                let (t, p) = (
+                    k as f64 * 0.618 * std::f64::consts::TAU,
+                    (k as f64 + 0.5) / 64.0,
+                );
+                let z = 1.0 - 2.0 * p;
+                let r = (1.0 - z * z).sqrt();
+                DVec3::new(r * t.cos(), r * t.sin(), z)
+            })
+            .collect();
+        let dt = 1e-7;
+        let axis = pose.rotation * body.revolution[0].unwrap().0;
+        let mut spins: Vec<DVec3> = (0..40)
+            .map(|k| {
+                let f = k as f64;
+                DVec3::new((1.3 * f).sin(), (2.1 * f).cos(), (0.7 * f).sin()) * (1.0 + f)
+            })
+            .collect();
+        spins.push(axis * 10.0);
+        let mut tight_about_axis = 0.0_f64;
+        for omega in spins {
+            let bound = body.surface_speed(omega);
+            let turned = Pose::new(
+                DQuat::from_scaled_axis(omega * dt) * pose.rotation,
+                pose.translation,
+            );
+            let rate = dirs
+                .iter()
+                .map(|&d| ((support(&turned, d) - support(&pose, d)) / dt).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                rate <= bound * (1.0 + 1e-4) + 1e-9,
+                "ω {omega:?}: support moves at {rate}, bound {bound}"
+            );
+            if omega == axis * 10.0 {
+                tight_about_axis = bound;
+            }
+        }
+        // About its own axis the wheel moves only by its offset.
+        let offset = body.revolution[0].unwrap().1;
+        assert!(offset > 0.01);
+        assert!((tight_about_axis - 10.0 * offset).abs() < 1e-12);
+        assert!(tight_about_axis < 0.5 * 10.0 * body.reach[0]);
+        // A three-axis ellipsoid is no solid of revolution: ‖ω‖·r.
+        let lump = Body::new(
+            "lump".into(),
+            Shape::ellipsoid(DVec3::new(0.01, 0.02, 0.03)).unwrap(),
+            BodyKind::Dynamic,
+            pose,
+            DVec3::ZERO,
+            DVec3::ZERO,
+            None,
+            0,
+            None,
+        );
+        assert!(lump.revolution[0].is_none());
+        let w = DVec3::new(1.0, -2.0, 0.5);
+        assert_eq!(lump.surface_speed(w), w.length() * lump.reach[0]);
     }
 }

@@ -315,12 +315,17 @@ fn spin(x: &crate::body::Body) -> f64 {
     }
 }
 
-/// ‖ω‖ᵏ·r of a body (r its rotational reach), zero for a fixed or sleeping one.
+/// ‖ω‖²·r of a body, r its rotational reach (the centripetal acceleration of its farthest
+/// point: an estimate of the curvature of its surface's motion), or for `k` = 1 how fast its
+/// turning moves its surface ([`crate::body::Body::surface_speed`]: ‖ω‖·r, but for a solid of
+/// revolution turning about its axis); zero for a fixed or sleeping body.
 fn spin_power(x: &crate::body::Body, k: i32) -> f64 {
-    if x.takes_impulses() && !x.asleep {
-        x.omega.length().powi(k) * x.max_reach()
-    } else {
+    if !(x.takes_impulses() && !x.asleep) {
         0.0
+    } else if k == 1 {
+        x.surface_speed(x.omega)
+    } else {
+        x.omega.length().powi(k) * x.max_reach()
     }
 }
 
@@ -366,8 +371,10 @@ pub(super) fn turn_speed(a: &crate::body::Body, b: &crate::body::Body, n: Option
 pub(super) struct TurnSide {
     /// The centre's velocity (zero for a fixed, scripted or sleeping body).
     velocity: DVec3,
-    /// ‖ω‖ times the rotational reach (zero for a fixed, scripted or sleeping body: a platter
-    /// spinning under a ball turns its face in its own plane).
+    /// How fast its turning moves its surface ([`crate::body::Body::surface_speed`]: ‖ω‖
+    /// times the rotational reach, but for a solid of revolution turning about its axis;
+    /// zero for a fixed, scripted or sleeping body: a platter spinning under a ball turns its
+    /// face in its own plane).
     spin_reach: f64,
     /// Whether the body is a compound.
     compound: bool,
@@ -386,11 +393,7 @@ impl TurnSide {
         let moving = x.takes_impulses() && !x.asleep;
         Self {
             velocity: if moving { velocity } else { DVec3::ZERO },
-            spin_reach: if moving {
-                omega.length() * x.max_reach()
-            } else {
-                0.0
-            },
+            spin_reach: if moving { x.surface_speed(omega) } else { 0.0 },
             compound: x.reach.len() > 1,
         }
     }
