@@ -320,7 +320,7 @@ fn spin(x: &crate::body::Body) -> f64 {
 /// turning moves its surface ([`crate::body::Body::surface_speed`]: ‖ω‖·r, but for a solid of
 /// revolution turning about its axis); zero for a fixed or sleeping body.
 fn spin_power(x: &crate::body::Body, k: i32) -> f64 {
-    if !(x.takes_impulses() && !x.asleep) {
+    if !x.takes_impulses() || x.asleep {
         0.0
     } else if k == 1 {
         x.surface_speed(x.omega)
