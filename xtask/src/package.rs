@@ -24,10 +24,10 @@
 //! builds each crate from its `.crate` file as a workspace of its own, without this
 //! workspace's profiles, so every dependency (faer, rayon, serde, …) is compiled again in
 //! another configuration: minutes on two cores, against this step's budget of seconds (it takes
-//! under one). The same sources are built by the clippy and test steps. `--offline`: the lockfiles are
-//! resolved from the registry index cargo cached for the steps before, so the check needs no
-//! network and reads nothing newer than what the workspace was built with. Nothing is written
-//! to the source tree (`--allow-dirty` only lets uncommitted changes be packaged).
+//! about one). The same sources are built by the clippy and test steps. `--offline`: the
+//! lockfiles are resolved from the registry index cargo cached for the steps before, so the check
+//! needs no network and reads nothing newer than what the workspace was built with. Nothing is
+//! written to the source tree (`--allow-dirty` only lets uncommitted changes be packaged).
 
 use std::path::Path;
 use std::process::Command;
