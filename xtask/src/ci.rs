@@ -3,14 +3,16 @@
 //! The steps are: `cargo fmt --all -- --check`; `cargo clippy --workspace --all-targets -- -D
 //! warnings`; `cargo test --workspace` (explicitly the whole workspace: the default members
 //! leave out xtask, whose own tests must run too); `cargo doc --workspace --no-deps` with
-//! `RUSTDOCFLAGS=-D warnings` (broken intra-doc links fail); the layering check and
-//! `validate`, both in-process. Each step prints a heading, then its wall time; a summary line
+//! `RUSTDOCFLAGS=-D warnings` (broken intra-doc links fail); the layering check, the packaging
+//! check (every crate under `crates/` packaged for crates.io in layer order, without building the
+//! packages: see [`crate::package`] for what is checked and why) and `validate`, all three
+//! in-process. Each step prints a heading, then its wall time; a summary line
 //! ends the run.
 
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use crate::{Result, cargo, layering, validate, workspace_root};
+use crate::{Result, cargo, layering, package, validate, workspace_root};
 
 /// One step of the sequence.
 enum Step {
@@ -65,6 +67,7 @@ const STEPS: &[Step] = &[
         &[("RUSTDOCFLAGS", "-D warnings")],
     ),
     Step::InProcess("layering", layering::run),
+    Step::InProcess("package", package::run),
     Step::InProcess("validate", || validate::run(&validate::Options::default())),
 ];
 
@@ -140,6 +143,7 @@ mod tests {
                 "cargo test --workspace",
                 "RUSTDOCFLAGS='-D warnings' cargo doc --workspace --no-deps",
                 "layering",
+                "package",
                 "validate",
             ]
         );

@@ -5,15 +5,16 @@
 //! **Owns**: the one entry point for CI (`ci` runs locally exactly what a CI job runs, so no logic
 //! lives in workflow YAML); the validation harness (`validate`: the registry of cases in
 //! [`cases`], their references and tolerances, how results are judged, printed and snapshotted in
-//! `fixtures/snapshots/`); the layering check (`layering`: crate dependencies against the layer
+//! `fixtures/snapshots/`); the packaging check (`package`: every crate under `crates/` can be
+//! packaged for crates.io); the layering check (`layering`: crate dependencies against the layer
 //! table of `docs/architecture.md`).
 //!
 //! **Must not know**: how any quantity is computed. Cases call the public API of the library
 //! crates and compare with independent references; xtask holds no geometry or physics of its
 //! own, and no library crate may learn about validation cases or snapshots.
 //!
-//! Modules: [`ci`] (the step sequence), [`layering`], [`validate`] (harness, checks, snapshots),
-//! [`cases`] (the registry). Dependencies are kept minimal: insta and serde_json only; the
+//! Modules: [`ci`] (the step sequence), [`layering`], [`package`], [`validate`] (harness,
+//! checks, snapshots), [`cases`] (the registry). Dependencies are kept minimal: insta and serde_json only; the
 //! command line is parsed by hand.
 
 mod bench;
@@ -22,6 +23,7 @@ mod cases;
 mod ci;
 mod forks;
 mod layering;
+mod package;
 // Without the `peers` feature the runner is built (so CI checks it) but has no engine to call.
 #[cfg_attr(not(feature = "peers"), allow(dead_code))]
 mod peers;
@@ -41,7 +43,8 @@ usage: cargo xtask <command>
 
 commands:
   ci                                  cargo fmt --check, clippy -D warnings, test --workspace,
-                                      layering, validate; stops at the first failure
+                                      doc, layering, package, validate; stops at the
+                                      first failure
   validate [--update] [--case NAME]   run the validation cases (all, or only NAME), check each
                                       metric against its reference, compare with the snapshots
                                       in fixtures/snapshots/; --update writes the snapshots
@@ -60,6 +63,9 @@ commands:
                                       --peers runs stacks, dominos, ramp, sliding→rolling and
                                       pool break in impulse and rapier3d-f64 side by side
                                       (builds xtask with --features peers; peers.csv, peers.svg)
+  package                             package every crate under crates/ for crates.io, in
+                                      layer order, without uploading or building them
+                                      (into target/package-check)
   layering                            check crate dependencies against the layer table of
                                       docs/architecture.md
   help                                print this message
@@ -72,6 +78,7 @@ enum Command {
     Validate(validate::Options),
     Bench(bench::Options),
     Layering,
+    Package,
     Help,
 }
 
@@ -89,6 +96,7 @@ fn main() -> ExitCode {
         Command::Validate(options) => validate::run(&options),
         Command::Bench(options) => bench::run_bench(&options),
         Command::Layering => layering::run(),
+        Command::Package => package::run(),
         Command::Help => {
             print!("{USAGE}");
             Ok(())
@@ -115,6 +123,7 @@ fn parse_args(args: &[String]) -> Result<Command> {
     match command.as_str() {
         "ci" => no_arguments(Command::Ci),
         "layering" => no_arguments(Command::Layering),
+        "package" => no_arguments(Command::Package),
         "help" | "-h" | "--help" => no_arguments(Command::Help),
         "validate" => parse_validate(rest).map(Command::Validate),
         "bench" => parse_bench(rest).map(Command::Bench),
@@ -189,6 +198,7 @@ mod tests {
     fn commands_parse() {
         assert_eq!(parse(&["ci"]), Ok(Command::Ci));
         assert_eq!(parse(&["layering"]), Ok(Command::Layering));
+        assert_eq!(parse(&["package"]), Ok(Command::Package));
         assert_eq!(parse(&["help"]), Ok(Command::Help));
         assert_eq!(
             parse(&["validate"]),

@@ -274,7 +274,8 @@ fn report(file: &BowlingFile, shard: Shard, wall: Option<f64>) -> String {
     if let Some(w) = wall {
         let _ = writeln!(
             t,
-            "wall time:   {w:.1} s ({:.2} throws per second)",
+            "wall time:   {} ({:.2} throws per second)",
+            crate::text::duration(w),
             file.outcomes.len() as f64 / w.max(1e-9)
         );
     }

@@ -1,7 +1,8 @@
 //! # impulse — the command-line program (layer 5)
 //!
 //! **Owns** the user-facing commands: argument parsing, reading input files, printing results
-//! as JSON, and turning every error into a message on stderr with a non-zero exit status.
+//! as JSON, and turning every error into one line on stderr that starts with `error: ` (as
+//! clap's usage errors do; [`text::error_line`]) with a non-zero exit status.
 //!
 //! **Must not know** any algorithm: each command is a thin shell over a library crate.
 //!
@@ -23,6 +24,7 @@ mod poses;
 mod reduce;
 mod run;
 mod study_io;
+mod text;
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -211,14 +213,17 @@ fn main() -> ExitCode {
             let mut out = std::io::stdout().lock();
             match writeln!(out, "{text}").and_then(|()| out.flush()) {
                 Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-                    eprintln!("error: cannot write to standard output: {e}");
+                    eprintln!(
+                        "{}",
+                        text::error_line(&format!("cannot write to standard output: {e}"))
+                    );
                     ExitCode::FAILURE
                 }
                 _ => ExitCode::SUCCESS,
             }
         }
         Err(message) => {
-            eprintln!("error: {message}");
+            eprintln!("{}", text::error_line(&message));
             ExitCode::FAILURE
         }
     }

@@ -222,7 +222,8 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
     if ran {
         let _ = writeln!(
             t,
-            "wall time:        {wall:.2} s ({:.1} drops per second)",
+            "wall time:        {} ({:.1} drops per second)",
+            crate::text::duration(wall),
             summary.drops as f64 / wall.max(1e-9)
         );
     }

@@ -7,6 +7,8 @@ use std::time::Instant;
 
 use impulse_sim::{ContactMode, Recording, Scene, World};
 
+use crate::text;
+
 /// Runs longer than this (wall seconds) show a progress line on stderr.
 const PROGRESS_AFTER_S: f64 = 2.0;
 /// When stderr is not a terminal, a progress line is written at most this often (wall s).
@@ -137,8 +139,8 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
 /// Table 7.2), and the multibodies' redone steps.
 fn profile_text(p: &impulse_sim::Profile, world: &World) -> String {
     let mut text = format!(
-        "\nprofile:          {:.3} s in the event loop\n",
-        p.total.as_secs_f64()
+        "\nprofile:          {} in the event loop\n",
+        text::duration(p.total.as_secs_f64())
     );
     for (name, share) in p.shares() {
         text.push_str(&format!("  {name:<28} {:5.1} %\n", 100.0 * share));
@@ -181,11 +183,11 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
     };
     let _ = writeln!(s, "scene:            {name} ({} bodies)", rec.names.len());
     let _ = writeln!(s, "simulated time:   {until} s");
-    let _ = writeln!(s, "wall time:        {:.3} s", rec.wall_time);
+    let _ = writeln!(s, "wall time:        {}", text::duration(rec.wall_time));
     let _ = writeln!(
         s,
-        "slowdown:         {:.4} (wall / simulated; < 1 is faster than real time)",
-        rec.wall_time / until
+        "slowdown:         {} (wall / simulated; < 1 is faster than real time)",
+        text::significant(rec.wall_time / until)
     );
     let _ = writeln!(s, "collisions:       {}", c.collisions);
     let _ = writeln!(
@@ -236,8 +238,9 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
     let depth = rec.max_penetration();
     let _ = write!(
         s,
-        "penetration:      largest {depth:.3e} ({:.3} ε_c, ε_c = {eps:.3e}), measured independently \
-         at {} frames ({} pair measurements)",
+        "penetration:      {}: largest {depth:.3e} ({:.3} ε_c, ε_c = {eps:.3e}), measured \
+         independently at {} frames ({} pair measurements)",
+        penetration_verdict(depth, eps),
         depth / eps,
         p.samples,
         p.pairs_measured
@@ -248,6 +251,19 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
         let _ = write!(s, "; closest approach {:.3e}", p.min_distance);
     }
     s
+}
+
+/// The penetration line's verdict in words: `none` (no overlap at any frame), `none beyond ε_c`
+/// (bodies overlapped by at most ε_c: contact, which the simulator allows), or `yes, beyond ε_c`
+/// (the promise broken; also for a depth that is not a number).
+fn penetration_verdict(depth: f64, eps: f64) -> &'static str {
+    if depth <= 0.0 {
+        "none"
+    } else if depth <= eps {
+        "none beyond ε_c"
+    } else {
+        "yes, beyond ε_c"
+    }
 }
 
 /// A line plot: series of (x, y) points with a title and axis names.
@@ -422,4 +438,20 @@ fn paths_plot(rec: &Recording, world: &World) -> String {
         })
         .collect();
     line_plot("centre-of-mass paths", names[a], names[b], &series)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The penetration line says in words whether the no-penetration promise held.
+    #[test]
+    fn penetration_is_judged_in_words() {
+        let eps = 1e-4;
+        assert_eq!(penetration_verdict(0.0, eps), "none");
+        assert_eq!(penetration_verdict(0.5e-4, eps), "none beyond ε_c");
+        assert_eq!(penetration_verdict(1e-4, eps), "none beyond ε_c");
+        assert_eq!(penetration_verdict(1.01e-4, eps), "yes, beyond ε_c");
+        assert_eq!(penetration_verdict(f64::NAN, eps), "yes, beyond ε_c");
+    }
 }

@@ -36,7 +36,7 @@ fn run_two_balls_writes_summary_csv_and_plots() {
     assert!(ok, "{stderr}");
     assert!(stdout.contains("collisions:       1\n"), "{stdout}");
     assert!(
-        stdout.contains("penetration:      largest 0.000e0 (0.000 ε_c"),
+        stdout.contains("penetration:      none: largest 0.000e0 (0.000 ε_c"),
         "{stdout}"
     );
     assert!(stdout.contains("slowdown:"), "{stdout}");
@@ -186,8 +186,21 @@ fn a_newcomers_first_scene() {
         .lines()
         .find(|l| l.starts_with("penetration:"))
         .unwrap();
-    let depth: f64 = line.split_whitespace().nth(2).unwrap().parse().unwrap();
+    let depth: f64 = line
+        .split("largest ")
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
     assert!(depth <= 1e-4, "{line}");
+    assert!(
+        line.starts_with("penetration:      none: ")
+            || line.starts_with("penetration:      none beyond ε_c: "),
+        "{line}"
+    );
 }
 
 /// Scene mistakes get a sentence that says what to write: the old double-parenthesised
@@ -351,4 +364,70 @@ fn profile_prints_shares_that_add_up() {
     let top = shares.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
     assert_eq!(top.0, "multibody dynamics", "{stdout}");
     assert!(stdout.contains("multibody steps redone"), "{stdout}");
+}
+
+/// Every failure is one line on stderr that starts with `error: ` (lower case, as cargo and
+/// clap write it): a malformed scene file, an invalid one, a missing one, an unknown argument,
+/// a bad value, and a value refused by the program itself; never `Error:`.
+#[test]
+fn every_error_starts_with_the_same_prefix() {
+    let dir = temp_dir("prefix");
+    let malformed = scene_file(&dir, "malformed.ron", "Scene(bodies: [Body(name: \"b\",");
+    let invalid = scene_file(
+        &dir,
+        "invalid.ron",
+        "Scene(duration: 1.0, bodies: [Body(name: \"b\", shape: Sphere(radius: -1.0))])",
+    );
+    let missing = dir.join("missing.ron");
+    let scene = scenes().join("two-ball-collision.ron");
+    let scene = scene.to_str().unwrap();
+    let cases: [&[&str]; 7] = [
+        &["run", malformed.to_str().unwrap()],
+        &["run", invalid.to_str().unwrap()],
+        &["run", missing.to_str().unwrap()],
+        &["run", scene, "--bogus"],
+        &["run", scene, "--until", "abc"],
+        &["run", scene, "--until", "-1"],
+        &["massprops", missing.to_str().unwrap()],
+    ];
+    for args in cases {
+        let (ok, stdout, stderr) = impulse(args);
+        assert!(!ok, "{args:?} succeeded: {stdout}");
+        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+        assert!(
+            !stderr
+                .lines()
+                .any(|l| l.to_lowercase().starts_with("error: error")),
+            "{args:?}: {stderr}"
+        );
+        assert!(!stderr.contains("Error:"), "{args:?}: {stderr}");
+    }
+}
+
+/// A run of a few milliseconds of wall time reports its wall time in a unit that shows it
+/// (`ms` or `µs`, three significant digits), not `0.000 s`; the slowdown is not `0.0000`.
+#[test]
+fn a_short_run_reports_a_readable_wall_time() {
+    let scene = scenes().join("two-ball-collision.ron");
+    let (ok, stdout, stderr) = impulse(&["run", scene.to_str().unwrap(), "--until", "0.01"]);
+    assert!(ok, "{stderr}");
+    let field = |label: &str| -> String {
+        let line = stdout.lines().find(|l| l.starts_with(label)).unwrap();
+        line[label.len()..].trim().to_owned()
+    };
+    let wall = field("wall time:");
+    let (number, unit) = wall.split_once(' ').unwrap();
+    let value: f64 = number.parse().unwrap();
+    assert!(
+        value > 0.0 && ["s", "ms", "µs", "ns"].contains(&unit),
+        "{wall}"
+    );
+    let digits = number.chars().filter(char::is_ascii_digit).count();
+    assert!(
+        digits == 3 || value >= 1000.0,
+        "{wall}: not 3 significant digits"
+    );
+    let slowdown = field("slowdown:");
+    let slowdown: f64 = slowdown.split_whitespace().next().unwrap().parse().unwrap();
+    assert!(slowdown > 0.0, "{stdout}");
 }
