@@ -145,6 +145,11 @@ pub fn cases() -> Vec<Case> {
         run: Box::new(rover::rover),
     });
     cases.push(Case {
+        name: "rover-standing",
+        description: "the rover scene as it is (wheel loops holding speed 0): after settling 0.5 s on its shocks, no link moves more than 2 ε_c in 5 s, no link is struck (its wheels rest held in a contact island), no interpenetration",
+        run: Box::new(rover::rover_standing),
+    });
+    cases.push(Case {
         name: "determinism-hybrid",
         description: "every hybrid scene (multibodies or controllers), in both contact models, run for its first half second on 1 and on 2 threads: bit-identical trajectories (hash)",
         run: Box::new(hybrid::determinism),
