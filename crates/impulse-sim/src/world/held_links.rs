@@ -15,9 +15,13 @@
 //!    and its links move along its dynamics (as a rigid body's held force and torque are
 //!    carried by its ballistic motion).
 //!
-//! An impulsive solve of a struck island changes the multibody's velocity at once. An island
-//! holding a link never takes the long rest step and never sleeps: the multibody is
-//! integrated by its own integrator whatever its islands do.
+//! An impulsive solve of a struck island changes the multibody's velocity at once
+//! (`Simulation::set_velocity`, which keeps joints resting on their stops there; the maps are
+//! projected through those stops, so a plank resting on its stop does not give way under a
+//! ball). A loop step of a held multibody ends at a joint stop's strike, and its island steps
+//! at that instant (`hybrid_step.rs`). Held links' predictions allow at least the sleep speed
+//! ([`HELD_LINK_SPEED_FLOOR`]). An island holding a link never takes the long rest step and
+//! never sleeps: the multibody is integrated by its own integrator whatever its islands do.
 
 use glam::DVec3;
 use impulse_collide::Motion;
@@ -30,8 +34,8 @@ use crate::error::SimError;
 
 /// The speed (in units of the sleep speed, [`crate::sustained::SustainedSettings`]) a held
 /// multibody's link predictions allow at least, in every direction and, over the link's
-/// reach, in rotation (`World::floor_link_predictions`). Default `1.0`: far above the solve's
-/// tolerance (1e-2 of it with the defaults), and a bound it gives a pair 1 mm apart is
+/// reach, in rotation (`World::floor_link_predictions`). Default `1.0`: a hundred times the
+/// solve's tolerance with the defaults, and a bound it gives a pair 1 mm apart is
 /// seconds long at ε_c = 0.1 mm.
 pub const HELD_LINK_SPEED_FLOOR: f64 = 1.0;
 
