@@ -319,7 +319,7 @@ impl Builder {
 /// change) moved through `rec`'s frames.
 ///
 /// # Errors
-/// A recorded body no longer in `world`, frames that do not hold every body, a non-finite
+/// No frame, a recorded body no longer in `world`, frames that do not hold every body, a non-finite
 /// number, frame times f32 cannot keep strictly increasing, or a file over the 4 GiB a GLB
 /// can hold.
 pub fn to_glb(rec: &Recording, world: &World) -> Result<Vec<u8>, String> {
@@ -333,6 +333,9 @@ pub fn to_glb(rec: &Recording, world: &World) -> Result<Vec<u8>, String> {
         },
         bin: Vec::new(),
     };
+    if rec.frames.is_empty() {
+        return Err("--gltf: the run recorded no frame".into());
+    }
     if let Some(f) = rec
         .frames
         .iter()
@@ -660,6 +663,36 @@ mod tests {
             offset > 0,
             "no body whose own frame differs from its body frame"
         );
+    }
+
+    /// A recording `to_glb` cannot write faithfully is an error naming why, not a panic or an
+    /// invalid file: no frame, frame times equal in f32, a non-finite state.
+    #[test]
+    fn bad_recordings_are_refused() {
+        let world = World::from_scene(&scene("two-ball-collision.ron")).unwrap();
+        let mut frame = impulse_sim::Frame::of(&world);
+        frame.time = 1.0;
+        let mut rec = impulse_sim::Recording {
+            names: world.bodies().map(|(_, b)| b.name.clone()).collect(),
+            handles: world.bodies().map(|(h, _)| h).collect(),
+            ..Default::default()
+        };
+        let refused = |rec: &Recording, why: &str| match to_glb(rec, &world) {
+            Ok(bytes) => panic!("accepted ({} bytes), expected `{why}`", bytes.len()),
+            Err(e) => assert!(e.contains(why), "{e}"),
+        };
+        refused(&rec, "no frame");
+        let mut close = frame.clone();
+        close.time += 1e-12;
+        rec.frames = vec![frame.clone(), close];
+        refused(&rec, "equal in f32");
+        let mut bad = frame.clone();
+        bad.time += 0.1;
+        bad.bodies[0].position.x = f64::NAN;
+        rec.frames = vec![frame.clone(), bad];
+        refused(&rec, "not a finite f32");
+        rec.frames = vec![frame];
+        assert!(to_glb(&rec, &world).is_ok());
     }
 
     /// A UV sphere's triangles face outward and the poles have no degenerate triangles.
