@@ -7,8 +7,8 @@
 //! **Must not know** any algorithm: each command is a thin shell over a library crate.
 //!
 //! Commands:
-//! - `impulse run <scene.ron> [--until T] [--out traj.csv|traj.json] [--plot DIR]`: simulate
-//!   a scene file (thesis chapters 1–3 and 7) and print a summary.
+//! - `impulse run <scene.ron> [--until T] [--out traj.csv|traj.json] [--plot DIR]
+//!   [--gltf out.glb]`: simulate a scene file (thesis chapters 1–3 and 7) and print a summary.
 //! - `impulse massprops <mesh.obj> [--density D | --mass M]`: exact mass properties of a closed
 //!   polygon mesh (thesis chapter 6), printed as JSON.
 //! - `impulse dynamics <model.urdf> [--q … --qd … --tau …] [--gravity gx,gy,gz]`: forward
@@ -20,6 +20,7 @@
 
 mod bowling;
 mod dynamics;
+mod glb;
 mod poses;
 mod reduce;
 mod run;
@@ -60,6 +61,11 @@ enum Command {
         /// Write SVG plots (energy.svg, paths.svg) into this directory.
         #[arg(long)]
         plot: Option<PathBuf>,
+        /// Write the run as an animated glTF 2.0 binary (.glb) for Blender or any glTF
+        /// viewer: one node per body with its mesh, translation and rotation keyframes at the
+        /// scene's output rate (the frames of --out), +Y up.
+        #[arg(long, value_name = "OUT.glb")]
+        gltf: Option<PathBuf>,
         /// Worker threads for the per-body work (default: every core). Results do not depend
         /// on it.
         #[arg(long)]
@@ -185,6 +191,7 @@ fn main() -> ExitCode {
             until,
             out,
             plot,
+            gltf,
             threads,
             contact_model,
             profile,
@@ -193,6 +200,7 @@ fn main() -> ExitCode {
             until: *until,
             out: out.as_deref(),
             plot: plot.as_deref(),
+            gltf: gltf.as_deref(),
             threads: *threads,
             contact_model: *contact_model,
             profile: *profile,

@@ -30,6 +30,8 @@ pub struct RunArgs<'a> {
     pub out: Option<&'a Path>,
     /// Directory for SVG plots.
     pub plot: Option<&'a Path>,
+    /// Animated glTF binary output (.glb).
+    pub gltf: Option<&'a Path>,
     /// Rayon threads (default: all cores).
     pub threads: Option<usize>,
     /// Contact model overriding the scene's.
@@ -74,6 +76,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
     if let Some(out) = args.out {
         format_of(out)?;
     }
+    if let Some(path) = args.gltf {
+        crate::glb::check_path(path)?;
+    }
     let mut world = World::from_scene(&scene).map_err(|e| e.to_string())?;
     for w in scene.warnings() {
         eprintln!("warning: {w}");
@@ -117,6 +122,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
             Format::Json => rec.to_json(),
         };
         std::fs::write(out, text).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    }
+    if let Some(path) = args.gltf {
+        crate::glb::write(path, &rec, &world)?;
     }
     if let Some(dir) = args.plot {
         std::fs::create_dir_all(dir)
