@@ -710,17 +710,20 @@ mod tests {
         )])
         .unwrap();
         let pose = Pose::from_rotation(DQuat::from_rotation_y(0.7));
-        let body = Body::new(
-            "wheel".into(),
-            shape.clone(),
-            BodyKind::Dynamic,
-            pose,
-            DVec3::ZERO,
-            DVec3::ZERO,
-            None,
-            0,
-            None,
-        );
+        let at_rest = |name: &str, shape: Shape| {
+            Body::new(
+                name.into(),
+                shape,
+                BodyKind::Dynamic,
+                pose,
+                DVec3::ZERO,
+                DVec3::ZERO,
+                None,
+                0,
+                None,
+            )
+        };
+        let body = at_rest("wheel", shape.clone());
         assert!(body.revolution[0].is_some());
         let support = |pose: &Pose, d: DVec3| -> f64 {
             shape
@@ -782,16 +785,9 @@ mod tests {
         assert!((tight_about_axis - 10.0 * offset).abs() < 1e-12);
         assert!(tight_about_axis < 0.5 * 10.0 * body.reach[0]);
         // A three-axis ellipsoid is no solid of revolution: ‖ω‖·r.
-        let lump = Body::new(
-            "lump".into(),
+        let lump = at_rest(
+            "lump",
             Shape::ellipsoid(DVec3::new(0.01, 0.02, 0.03)).unwrap(),
-            BodyKind::Dynamic,
-            pose,
-            DVec3::ZERO,
-            DVec3::ZERO,
-            None,
-            0,
-            None,
         );
         assert!(lump.revolution[0].is_none());
         let w = DVec3::new(1.0, -2.0, 0.5);

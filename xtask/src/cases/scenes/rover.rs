@@ -181,6 +181,16 @@ impl WorldController for Bulldozer {
     }
 }
 
+/// The rover's description in its scene.
+fn rover_desc(scene: &impulse_sim::Scene) -> Result<&impulse_sim::scene::MultibodyDesc, String> {
+    scene
+        .desc
+        .multibodies
+        .iter()
+        .find(|m| m.name == "rover")
+        .ok_or_else(|| "no rover in the scene".to_string())
+}
+
 /// The case: the scene's blocks and platform read from the scene, the controller added, the
 /// scene run for its duration.
 pub(super) fn rover() -> Result<Vec<Metric>, String> {
@@ -205,12 +215,7 @@ pub(super) fn rover() -> Result<Vec<Metric>, String> {
         .filter(|b| b.name.starts_with("block"))
         .map(|b| world.handle(&b.name).ok_or("no block"))
         .collect::<Result<_, _>>()?;
-    let mb = scene
-        .desc
-        .multibodies
-        .iter()
-        .find(|m| m.name == "rover")
-        .ok_or("no rover in the scene")?;
+    let mb = rover_desc(&scene)?;
     let front_axle: Vec<(f64, f64)> = mb
         .joints
         .iter()
@@ -292,12 +297,7 @@ fn standing(scene: &impulse_sim::Scene) -> Result<Vec<Metric>, String> {
     world.set_checking(true);
     let eps = world.collision_epsilon();
     let rover = world.multibody_handle("rover").ok_or("no rover")?;
-    let mb = scene
-        .desc
-        .multibodies
-        .iter()
-        .find(|m| m.name == "rover")
-        .ok_or("no rover in the scene")?;
+    let mb = rover_desc(scene)?;
     let links: Vec<(BodyHandle, f64)> = mb
         .links
         .iter()
