@@ -75,9 +75,17 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         .map_err(|e| format!("--until {until}: {e} (lower the scene's output_rate)"))?;
     if let Some(out) = args.out {
         format_of(out)?;
+        directory_exists("--out", out)?;
     }
     if let Some(path) = args.gltf {
         crate::glb::check_path(path)?;
+        directory_exists("--gltf", path)?;
+    }
+    // The outputs' places are checked before the run, not after it: a long run whose
+    // results cannot be written is lost.
+    if let Some(dir) = args.plot {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("--plot {}: cannot create it: {e}", dir.display()))?;
     }
     let mut world = World::from_scene(&scene).map_err(|e| e.to_string())?;
     for w in scene.warnings() {
@@ -166,6 +174,23 @@ fn profile_text(p: &impulse_sim::Profile, world: &World) -> String {
 enum Format {
     Csv,
     Json,
+}
+
+/// Refuses an output file whose directory does not exist (named with its option `flag`).
+fn directory_exists(flag: &str, file: &Path) -> Result<(), String> {
+    let dir = match file.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if dir.is_dir() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{flag} {}: the directory {} does not exist",
+            file.display(),
+            dir.display()
+        ))
+    }
 }
 
 fn format_of(out: &Path) -> Result<Format, String> {

@@ -431,3 +431,24 @@ fn a_short_run_reports_a_readable_wall_time() {
     let slowdown: f64 = slowdown.split_whitespace().next().unwrap().parse().unwrap();
     assert!(slowdown > 0.0, "{stdout}");
 }
+
+/// An output that cannot be written is refused before the run, naming the option, the file
+/// and its missing directory: a long run whose results cannot be written is not run at all
+/// (no summary is printed).
+#[test]
+fn an_unwritable_output_is_refused_before_the_run() {
+    let scene = scenes().join("two-ball-collision.ron");
+    let missing = std::env::temp_dir().join("impulse-no-such-dir-7f3a/sub");
+    for (flag, file) in [("--out", "traj.csv"), ("--gltf", "run.glb")] {
+        let path = missing.join(file);
+        let (ok, stdout, stderr) =
+            impulse(&["run", scene.to_str().unwrap(), flag, path.to_str().unwrap()]);
+        assert!(!ok, "{flag}: {stdout}");
+        assert!(
+            stderr.starts_with(&format!("error: {flag} {}", path.display()))
+                && stderr.contains("does not exist"),
+            "{flag}: {stderr}"
+        );
+        assert!(!stdout.contains("scene:"), "{flag}: ran anyway: {stdout}");
+    }
+}
