@@ -4,6 +4,7 @@
 //! Jacobians), the solution obeys the laws read from the test's own matrices: q̇ changes by
 //! M⁻¹·Σ Jₚᵀ p, complementarity, the Coulomb disk, and no kinetic energy gained.
 
+use super::tests::{contact_at, unit};
 use super::*;
 use glam::DQuat;
 use rand::rngs::Xoshiro256PlusPlus;
@@ -14,19 +15,6 @@ fn tight() -> SolverSettings {
         max_iterations: 200_000,
         tolerance: 1e-13,
         direct_after: None,
-    }
-}
-
-fn unit(rng: &mut Xoshiro256PlusPlus) -> DVec3 {
-    loop {
-        let v = DVec3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        );
-        if v.length() > 0.1 && v.length() < 1.0 {
-            return v.normalize();
-        }
     }
 }
 
@@ -84,28 +72,19 @@ fn a_rigid_body_as_a_system_is_solved_as_the_rigid_body() {
         let mu = rng.random_range(0.0..1.2);
         let mut contacts: Vec<Contact> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
             .iter()
-            .map(|&(sx, sy)| Contact {
-                body1: 0,
-                body2: None,
-                point: DVec3::new(sx * half.x, sy * half.y, 0.0),
-                normal: DVec3::Z,
-                friction: mu,
-                target_normal_velocity: 0.0,
-                velocity_bias: DVec3::ZERO,
-                lever_arms: None,
-                impulse: DVec3::ZERO,
+            .map(|&(sx, sy)| {
+                contact_at(
+                    0,
+                    None,
+                    DVec3::new(sx * half.x, sy * half.y, 0.0),
+                    DVec3::Z,
+                    mu,
+                )
             })
             .collect();
         contacts.push(Contact {
-            body1: 1,
-            body2: Some(0),
-            point: DVec3::new(0.05, 0.02, 0.1),
-            normal: DVec3::Z,
-            friction: mu,
             target_normal_velocity: 0.01,
-            velocity_bias: DVec3::ZERO,
-            lever_arms: None,
-            impulse: DVec3::ZERO,
+            ..contact_at(1, Some(0), DVec3::new(0.05, 0.02, 0.1), DVec3::Z, mu)
         });
         let rigid_box = IslandBody {
             body: Body::moving(m, inertia).unwrap(),
@@ -314,17 +293,9 @@ fn random_mechanisms_obey_the_laws_and_change_by_m_inverse_j_transpose_p() {
         let mut contacts: Vec<Contact> = (0..rng.random_range(1..=6usize))
             .map(|_| {
                 let (body1, body2) = pairs[rng.random_range(0..pairs.len())];
-                Contact {
-                    body1,
-                    body2,
-                    point: unit(&mut rng) * rng.random_range(0.0..0.5),
-                    normal: unit(&mut rng),
-                    friction: rng.random_range(0.0..1.5),
-                    target_normal_velocity: 0.0,
-                    velocity_bias: DVec3::ZERO,
-                    lever_arms: None,
-                    impulse: DVec3::ZERO,
-                }
+                let point = unit(&mut rng) * rng.random_range(0.0..0.5);
+                let normal = unit(&mut rng);
+                contact_at(body1, body2, point, normal, rng.random_range(0.0..1.5))
             })
             .collect();
         let q0 = system.velocity.clone();
@@ -413,17 +384,7 @@ fn malformed_systems_are_refused_and_change_nothing() {
         velocity: DVec3::ZERO,
         omega: DVec3::ZERO,
     };
-    let contact = Contact {
-        body1: 0,
-        body2: None,
-        point: DVec3::ZERO,
-        normal: DVec3::Z,
-        friction: 0.5,
-        target_normal_velocity: 0.0,
-        velocity_bias: DVec3::ZERO,
-        lever_arms: None,
-        impulse: DVec3::ZERO,
-    };
+    let contact = contact_at(0, None, DVec3::ZERO, DVec3::Z, 0.5);
     let good = rigid_as_system(
         0,
         1.0,
@@ -503,17 +464,8 @@ fn the_collision_matrix_of_a_link_contact_is_its_velocity_response() {
         let systems = vec![system];
         let of = system::membership(&bodies, &systems).unwrap();
         for (body1, body2) in [(0, None), (0, Some(2)), (1, Some(0))] {
-            let c = Contact {
-                body1,
-                body2,
-                point: unit(&mut rng) * 0.4,
-                normal: unit(&mut rng),
-                friction: 0.5,
-                target_normal_velocity: 0.0,
-                velocity_bias: DVec3::ZERO,
-                lever_arms: None,
-                impulse: DVec3::ZERO,
-            };
+            let point = unit(&mut rng) * 0.4;
+            let c = contact_at(body1, body2, point, unit(&mut rng), 0.5);
             let row = prepare_row(&bodies, &systems, &of, &c).unwrap();
             let links = row.links.as_ref().unwrap();
             for (j, e) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().enumerate() {

@@ -23,6 +23,41 @@ fn tight() -> SolverSettings {
     }
 }
 
+/// A contact with no warm start, target, bias or lever arms: the plain law.
+pub(super) fn contact_at(
+    body1: usize,
+    body2: Option<usize>,
+    point: DVec3,
+    normal: DVec3,
+    friction: f64,
+) -> Contact {
+    Contact {
+        body1,
+        body2,
+        point,
+        normal,
+        friction,
+        target_normal_velocity: 0.0,
+        velocity_bias: DVec3::ZERO,
+        lever_arms: None,
+        impulse: DVec3::ZERO,
+    }
+}
+
+/// A random unit vector (rejection sampling in the unit ball's shell).
+pub(super) fn unit(rng: &mut Xoshiro256PlusPlus) -> DVec3 {
+    loop {
+        let v = DVec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        if v.length() > 0.1 && v.length() < 1.0 {
+            return v.normalize();
+        }
+    }
+}
+
 /// A solid box of mass `m` and half extents `half`, axis-aligned, centre `com`, at rest.
 fn box_body(m: f64, half: DVec3, com: DVec3) -> (IslandBody, DMat3) {
     let inertia = box_inertia(m, half);
@@ -55,16 +90,9 @@ fn face_contacts(
 ) -> Vec<Contact> {
     [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
         .iter()
-        .map(|&(sx, sy)| Contact {
-            body1: upper,
-            body2: lower,
-            point: DVec3::new(com.x + sx * half.x, com.y + sy * half.y, z),
-            normal: DVec3::Z,
-            friction: mu,
-            target_normal_velocity: 0.0,
-            velocity_bias: DVec3::ZERO,
-            lever_arms: None,
-            impulse: DVec3::ZERO,
+        .map(|&(sx, sy)| {
+            let point = DVec3::new(com.x + sx * half.x, com.y + sy * half.y, z);
+            contact_at(upper, lower, point, DVec3::Z, mu)
         })
         .collect()
 }
@@ -303,16 +331,6 @@ fn random_island(
     let mut bodies = Vec::new();
     let mut inertias = Vec::new();
     let mut masses = Vec::new();
-    let unit = |rng: &mut Xoshiro256PlusPlus| loop {
-        let v = DVec3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        );
-        if v.length() > 0.1 && v.length() < 1.0 {
-            return v.normalize();
-        }
-    };
     for _ in 0..n {
         let m = rng.random_range(0.1..10.0);
         let half = DVec3::new(
@@ -344,17 +362,9 @@ fn random_island(
                 let j = rng.random_range(0..n - 1);
                 Some(if j >= body1 { j + 1 } else { j })
             };
-            Contact {
-                body1,
-                body2,
-                point: unit(rng) * rng.random_range(0.0..1.0),
-                normal: unit(rng),
-                friction: rng.random_range(0.0..1.5),
-                target_normal_velocity: 0.0,
-                velocity_bias: DVec3::ZERO,
-                lever_arms: None,
-                impulse: DVec3::ZERO,
-            }
+            let point = unit(rng) * rng.random_range(0.0..1.0);
+            let normal = unit(rng);
+            contact_at(body1, body2, point, normal, rng.random_range(0.0..1.5))
         })
         .collect();
     (bodies, inertias, masses, contacts)

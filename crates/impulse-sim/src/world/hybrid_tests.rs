@@ -12,23 +12,29 @@ use crate::{LinkShape, World, WorldSettings};
 
 const EPS: f64 = 1e-3;
 
-/// A box of half extents `h` and mass `m`, centred `c` along the link's −z from its frame.
-fn rod(m: f64, h: DVec3, c: f64) -> (SpatialInertia, ShapeDesc) {
+/// A box of half extents `h` and mass `m` centred at `c` in its link's frame: its inertia
+/// about its centre and its shape.
+pub(super) fn slab(m: f64, h: DVec3, c: DVec3) -> (SpatialInertia, ShapeDesc) {
     let i = DMat3::from_diagonal(DVec3::new(
         h.y * h.y + h.z * h.z,
         h.x * h.x + h.z * h.z,
         h.x * h.x + h.y * h.y,
     )) * (m / 3.0);
     (
-        SpatialInertia::new(m, DVec3::new(0.0, 0.0, -c), i),
+        SpatialInertia::new(m, c, i),
         ShapeDesc::Compound {
             parts: vec![PartDesc {
                 shape: ShapeDesc::cuboid(h.to_array()),
-                position: [0.0, 0.0, -c],
+                position: c.to_array(),
                 rotation: RotationDesc::default(),
             }],
         },
     )
+}
+
+/// A box of half extents `h` and mass `m`, centred `c` along the link's −z from its frame.
+fn rod(m: f64, h: DVec3, c: f64) -> (SpatialInertia, ShapeDesc) {
+    slab(m, h, DVec3::new(0.0, 0.0, -c))
 }
 
 /// A pendulum hanging from a pivot at `pivot`, swinging about y, at angle `q` (rad) with

@@ -2,14 +2,14 @@
 //! gravity, its first and last links (not adjacent) sampled by brute-force distance every
 //! frame, with the option on and off.
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use impulse_collide::{PairCache, depth, shape};
 use impulse_geom::{Pose, SpatialInertia};
 use impulse_multibody::{BaseKind, Integrator, JointPassive, JointSpec, ModelBuilder, Simulation};
 
+use super::hybrid_tests::slab;
 use super::{BodyHandle, MultibodyOptions, World, WorldSettings};
 use crate::LinkShape;
-use crate::scene::{PartDesc, RotationDesc, ShapeDesc};
 use crate::sustained::ContactMode;
 
 /// ε_c of the world (m).
@@ -24,26 +24,6 @@ const REST_GAP: f64 = 2.0 * EPS;
 /// Without self-collision, the last link must sink at least this deep into the first (it
 /// passes through: its width, 6 cm, not a grazing touch).
 const THROUGH: f64 = 10.0 * EPS;
-
-/// A box of half extents `h` and mass `m` centred at `c` in its link's frame: its inertia
-/// about its centre and its shape.
-fn slab(m: f64, h: DVec3, c: DVec3) -> (SpatialInertia, ShapeDesc) {
-    let i = DMat3::from_diagonal(DVec3::new(
-        h.y * h.y + h.z * h.z,
-        h.x * h.x + h.z * h.z,
-        h.x * h.x + h.y * h.y,
-    )) * (m / 3.0);
-    (
-        SpatialInertia::new(m, c, i),
-        ShapeDesc::Compound {
-            parts: vec![PartDesc {
-                shape: ShapeDesc::cuboid(h.to_array()),
-                position: c.to_array(),
-                rotation: RotationDesc::default(),
-            }],
-        },
-    )
-}
 
 /// The chain, all joints about y: link `a`, a 0.6 m plate hinged to the ground at
 /// (0, 0, 0.5) and held level by a stiff damped spring; link `b`, a 0.25 m bar hinged
