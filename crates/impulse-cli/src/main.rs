@@ -21,6 +21,7 @@
 mod bowling;
 mod dynamics;
 mod glb;
+mod mesh;
 mod poses;
 mod reduce;
 mod run;
