@@ -5,14 +5,14 @@
 //! leave out xtask, whose own tests must run too); `cargo doc --workspace --no-deps` with
 //! `RUSTDOCFLAGS=-D warnings` (broken intra-doc links fail); the layering check, the packaging
 //! check (every crate under `crates/` packaged for crates.io in layer order, without building the
-//! packages: see [`crate::package`] for what is checked and why) and `validate`, all three
-//! in-process. Each step prints a heading, then its wall time; a summary line
+//! packages: see [`crate::package`] for what is checked and why), `validate` and `viewer`
+//! (the replay pages in headless Chromium: [`crate::viewer`]), all four in-process. Each step prints a heading, then its wall time; a summary line
 //! ends the run.
 
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use crate::{Result, cargo, layering, package, validate, workspace_root};
+use crate::{Result, cargo, layering, package, validate, viewer, workspace_root};
 
 /// One step of the sequence.
 enum Step {
@@ -69,6 +69,7 @@ const STEPS: &[Step] = &[
     Step::InProcess("layering", layering::run),
     Step::InProcess("package", package::run),
     Step::InProcess("validate", || validate::run(&validate::Options::default())),
+    Step::InProcess("viewer", viewer::run),
 ];
 
 /// Runs every step; `Err` names the step that failed and why.

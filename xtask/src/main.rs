@@ -19,6 +19,7 @@
 
 mod bench;
 mod bowling;
+mod browser;
 mod cases;
 mod ci;
 mod forks;
@@ -30,6 +31,7 @@ mod peers;
 mod poses;
 mod stacks;
 mod validate;
+mod viewer;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -43,7 +45,7 @@ usage: cargo xtask <command>
 
 commands:
   ci                                  cargo fmt --check, clippy -D warnings, test --workspace,
-                                      doc, layering, package, validate; stops at the
+                                      doc, layering, package, validate, viewer; stops at the
                                       first failure
   validate [--update] [--case NAME]   run the validation cases (all, or only NAME), check each
                                       metric against its reference, compare with the snapshots
@@ -66,6 +68,11 @@ commands:
   package                             package every crate under crates/ for crates.io, in
                                       layer order, without uploading or building them
                                       (into target/package-check)
+  viewer                              the pages of `impulse run --html` for dominos, pool
+                                      break, rattleback and 50 bodies over 30 s, opened in
+                                      headless Chromium: no console error, bodies drawn where
+                                      the trajectory says, picking, scrubbing, frame rate;
+                                      screenshots in target/viewer
   layering                            check crate dependencies against the layer table of
                                       docs/architecture.md
   help                                print this message
@@ -79,6 +86,7 @@ enum Command {
     Bench(bench::Options),
     Layering,
     Package,
+    Viewer,
     Help,
 }
 
@@ -97,6 +105,7 @@ fn main() -> ExitCode {
         Command::Bench(options) => bench::run_bench(&options),
         Command::Layering => layering::run(),
         Command::Package => package::run(),
+        Command::Viewer => viewer::run(),
         Command::Help => {
             print!("{USAGE}");
             Ok(())
@@ -124,6 +133,7 @@ fn parse_args(args: &[String]) -> Result<Command> {
         "ci" => no_arguments(Command::Ci),
         "layering" => no_arguments(Command::Layering),
         "package" => no_arguments(Command::Package),
+        "viewer" => no_arguments(Command::Viewer),
         "help" | "-h" | "--help" => no_arguments(Command::Help),
         "validate" => parse_validate(rest).map(Command::Validate),
         "bench" => parse_bench(rest).map(Command::Bench),

@@ -8,7 +8,8 @@
 //!
 //! Commands:
 //! - `impulse run <scene.ron> [--until T] [--out traj.csv|traj.json] [--plot DIR]
-//!   [--gltf out.glb]`: simulate a scene file (thesis chapters 1–3 and 7) and print a summary.
+//!   [--gltf out.glb] [--html out.html]`: simulate a scene file (thesis chapters 1–3 and 7)
+//!   and print a summary.
 //! - `impulse massprops <mesh.obj> [--density D | --mass M]`: exact mass properties of a closed
 //!   polygon mesh (thesis chapter 6), printed as JSON.
 //! - `impulse dynamics <model.urdf> [--q … --qd … --tau …] [--gravity gx,gy,gz]`: forward
@@ -21,6 +22,7 @@
 mod bowling;
 mod dynamics;
 mod glb;
+mod html;
 mod mesh;
 mod poses;
 mod reduce;
@@ -67,6 +69,12 @@ enum Command {
         /// scene's output rate (the frames of --out), +Y up.
         #[arg(long, value_name = "OUT.glb")]
         gltf: Option<PathBuf>,
+        /// Write the run as one self-contained web page (no network needed to open it) that
+        /// replays it with WebGL: every body from its real geometry, orbit/zoom/pan camera,
+        /// play/pause/step/scrub, playback speed, a body list with speed and energy, impacts
+        /// on the time line and as flashes, and the energy plot.
+        #[arg(long, value_name = "OUT.html")]
+        html: Option<PathBuf>,
         /// Worker threads for the per-body work (default: every core). Results do not depend
         /// on it.
         #[arg(long)]
@@ -193,6 +201,7 @@ fn main() -> ExitCode {
             out,
             plot,
             gltf,
+            html,
             threads,
             contact_model,
             profile,
@@ -202,6 +211,7 @@ fn main() -> ExitCode {
             out: out.as_deref(),
             plot: plot.as_deref(),
             gltf: gltf.as_deref(),
+            html: html.as_deref(),
             threads: *threads,
             contact_model: *contact_model,
             profile: *profile,

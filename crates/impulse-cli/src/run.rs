@@ -32,6 +32,8 @@ pub struct RunArgs<'a> {
     pub plot: Option<&'a Path>,
     /// Animated glTF binary output (.glb).
     pub gltf: Option<&'a Path>,
+    /// Self-contained replay page output (.html).
+    pub html: Option<&'a Path>,
     /// Rayon threads (default: all cores).
     pub threads: Option<usize>,
     /// Contact model overriding the scene's.
@@ -81,6 +83,10 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         crate::glb::check_path(path)?;
         directory_exists("--gltf", path)?;
     }
+    if let Some(path) = args.html {
+        crate::html::check_path(path)?;
+        directory_exists("--html", path)?;
+    }
     // The outputs' places are checked before the run, not after it: a long run whose
     // results cannot be written is lost.
     if let Some(dir) = args.plot {
@@ -98,6 +104,8 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         world.set_threads(n).map_err(|e| e.to_string())?;
     }
     world.set_profiling(args.profile);
+    // The page shows the impacts: keep them all.
+    world.set_event_log(args.html.is_some());
     let start = Instant::now();
     let terminal = std::io::stderr().is_terminal();
     let (mut shown, mut last_line) = (false, 0.0);
@@ -133,6 +141,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
     }
     if let Some(path) = args.gltf {
         crate::glb::write(path, &rec, &world)?;
+    }
+    if let Some(path) = args.html {
+        crate::html::write(path, &rec, &world, &scene)?;
     }
     if let Some(dir) = args.plot {
         std::fs::create_dir_all(dir)

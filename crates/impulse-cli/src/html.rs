@@ -1,0 +1,500 @@
+//! `impulse run --html out.html`: the run as one self-contained web page that replays it with
+//! WebGL, for a user who wants to watch what happened before reading numbers.
+//!
+//! The page needs no network: the renderer and its controls (`viewer/viewer.js`,
+//! `viewer/viewer.css`, `viewer/viewer.html`, plain JavaScript written for this page, no
+//! library) are compiled into the program with `include_str!` and written inline, and the run
+//! itself is one base64 block of little-endian binary data described by a small JSON header.
+//!
+//! ## What the page gets
+//! - Every body, drawn from the triangles `--gltf` draws ([`crate::mesh`]), with its name and
+//!   kind (fixed bodies in a muted colour). Bodies with the same triangles share one mesh (a
+//!   row of dominos is one mesh).
+//! - Per recorded frame (the frames of `--out`): the time, every body's own-frame position and
+//!   rotation (the `x … qw` columns), its speed ‖v‖ (centre of mass, m/s) and its energy
+//!   (kinetic plus potential, J; not a number for bodies without mass: fixed, scripted), and
+//!   the world's kinetic and potential energy.
+//! - The impacts: collisions (and fallback impulses) of the run's event log, with time, point,
+//!   the two bodies and the impulse's magnitude, drawn as markers on the time line and as
+//!   flashes at the contact point. Microcollisions (resting contact) are left out: at rest
+//!   there are thousands per second and they would hide the impacts. At most [`MAX_EVENTS`],
+//!   the strongest.
+//!
+//! ## Layout of the data block
+//! All numbers are 4 bytes (f32 or u32, little-endian), sections back to back in this order,
+//! with the counts in the header: for each mesh its positions (3 f32 per vertex), normals (3
+//! f32 per vertex) and triangle indices (u32); the frame times (F); the poses (F × B × 7: x y z
+//! qx qy qz qw); the speeds (F × B); the energies (F × B); the world's kinetic and potential
+//! energy (F × 2); the events' numbers (E × 5: time, x, y, z, |impulse|) and their bodies (E
+//! × 2 u32 indices into the body list, [`NO_BODY`] for none). Positions are rounded to f32
+//! here, the one place, as in `--gltf`.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use base64::Engine as _;
+use impulse_geom::{DMat3, DVec3};
+use impulse_sim::body::{Body, BodyKind};
+use impulse_sim::contact::ContactKind;
+use impulse_sim::{BodyState, ContactEvent, Recording, Scene, World};
+use serde_json::json;
+
+use crate::mesh::body_triangles;
+
+/// The page's markup (the body of the document, without the data and the script).
+const MARKUP: &str = include_str!("../viewer/viewer.html");
+/// The page's style sheet.
+const STYLE: &str = include_str!("../viewer/viewer.css");
+/// The renderer and its controls.
+const SCRIPT: &str = include_str!("../viewer/viewer.js");
+
+/// The version of the data layout the script reads (checked by the script).
+pub const FORMAT: &str = "impulse-viewer 1";
+/// Most impacts a page shows; beyond it the strongest are kept (a run with more impacts than
+/// this has more than a time line of markers can show anyway).
+pub const MAX_EVENTS: usize = 20_000;
+/// The body index of an event's missing body (a contact with the world).
+pub const NO_BODY: u32 = u32::MAX;
+
+/// Refuses a `--html` file name that does not end in `.html` or `.htm` (checked before the
+/// run).
+///
+/// # Errors
+/// A message naming the path.
+pub fn check_path(path: &Path) -> Result<(), String> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("html" | "htm") => Ok(()),
+        _ => Err(format!(
+            "--html {}: the file name must end in .html",
+            path.display()
+        )),
+    }
+}
+
+/// Writes the run as a page at `path`.
+///
+/// # Errors
+/// What [`to_html`] refuses, or the file that cannot be written, named.
+pub fn write(path: &Path, rec: &Recording, world: &World, scene: &Scene) -> Result<(), String> {
+    let title = path.file_stem().map_or_else(
+        || "impulse run".into(),
+        |s| s.to_string_lossy().into_owned(),
+    );
+    let text = to_html(rec, world, scene, &title)?;
+    std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// The little-endian data block being written.
+#[derive(Default)]
+struct Block(Vec<u8>);
+
+impl Block {
+    /// Appends f32s, refusing a non-finite number where `finite` (a position, a time).
+    fn floats(
+        &mut self,
+        values: impl IntoIterator<Item = f64>,
+        finite: bool,
+        what: &dyn Fn() -> String,
+    ) -> Result<(), String> {
+        for x in values {
+            let y = x as f32;
+            if finite && !y.is_finite() {
+                return Err(format!(
+                    "--html: {}: {x} cannot be written (not a finite f32)",
+                    what()
+                ));
+            }
+            self.0.extend(y.to_le_bytes());
+        }
+        Ok(())
+    }
+
+    fn u32s(&mut self, values: impl IntoIterator<Item = u32>) {
+        for x in values {
+            self.0.extend(x.to_le_bytes());
+        }
+    }
+}
+
+/// A body's energy in state `s`: `½ m v² + ½ ω·Iω − m g·c` (J), `NaN` without mass.
+///
+/// The inertia is the body's principal moments turned by the rotation of its body frame,
+/// which is the recorded own frame times the inverse of the body's fixed offset
+/// ([`Body::frame`]: own = body frame × offset).
+pub fn body_energy(body: &Body, s: &BodyState, gravity: DVec3) -> f64 {
+    let Some(m) = body.mass else { return f64::NAN };
+    let r = DMat3::from_quat(s.rotation * body.frame.rotation.inverse());
+    let inertia = r * DMat3::from_diagonal(m.moments) * r.transpose();
+    0.5 * m.mass * s.velocity.length_squared() + 0.5 * s.omega.dot(inertia * s.omega)
+        - m.mass * gravity.dot(s.com)
+}
+
+/// The impacts the page shows: collisions and fallback impulses, the [`MAX_EVENTS`] strongest,
+/// in time order.
+fn impacts(events: &[ContactEvent]) -> Vec<&ContactEvent> {
+    let mut shown: Vec<&ContactEvent> = events
+        .iter()
+        .filter(|e| matches!(e.kind, ContactKind::Collision | ContactKind::Fallback))
+        .collect();
+    if shown.len() > MAX_EVENTS {
+        shown.sort_by(|a, b| b.impulse.length().total_cmp(&a.impulse.length()));
+        shown.truncate(MAX_EVENTS);
+    }
+    shown.sort_by(|a, b| a.time.total_cmp(&b.time));
+    shown
+}
+
+/// The kind of a body as the page names it.
+fn kind_name(kind: BodyKind) -> &'static str {
+    match kind {
+        BodyKind::Fixed => "fixed",
+        BodyKind::Dynamic => "dynamic",
+        BodyKind::Scripted | BodyKind::Link => "driven",
+    }
+}
+
+/// The run as a page: the bodies of `world` (shapes do not change) moved through `rec`'s
+/// frames, with `world`'s event log as impacts (empty unless [`World::set_event_log`] was on),
+/// titled `title`.
+///
+/// # Errors
+/// No frame, a recorded body no longer in `world`, frames that do not hold every body, or a
+/// non-finite position or time.
+pub fn to_html(
+    rec: &Recording,
+    world: &World,
+    scene: &Scene,
+    title: &str,
+) -> Result<String, String> {
+    if rec.frames.is_empty() {
+        return Err("--html: the run recorded no frame".into());
+    }
+    if let Some(f) = rec
+        .frames
+        .iter()
+        .find(|f| f.bodies.len() != rec.names.len())
+    {
+        return Err(format!(
+            "--html: the frame at t = {} holds {} bodies, not the {} recorded",
+            f.time,
+            f.bodies.len(),
+            rec.names.len()
+        ));
+    }
+    let mut bodies = Vec::with_capacity(rec.names.len());
+    for (name, &handle) in rec.names.iter().zip(&rec.handles) {
+        let body = world
+            .body(handle)
+            .ok_or_else(|| format!("--html: body `{name}` is no longer in the world"))?;
+        bodies.push(body);
+    }
+    let gravity = world.gravity();
+    let mut block = Block::default();
+
+    // The meshes, one per distinct set of triangles.
+    let mut meshes = Vec::new();
+    let mut mesh_of: HashMap<Vec<u8>, usize> = HashMap::new();
+    let mut body_meshes = Vec::with_capacity(bodies.len());
+    for (body, name) in bodies.iter().zip(&rec.names) {
+        let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+        for t in body_triangles(body) {
+            let base = (positions.len() / 3) as u32;
+            positions.extend(t.positions.iter().flat_map(|p| p.to_array()));
+            normals.extend(t.normals.iter().flat_map(|p| p.to_array()));
+            indices.extend(t.indices.iter().map(|i| base + i));
+        }
+        let mut bytes = Block::default();
+        let what = || format!("body `{name}`'s mesh");
+        bytes.floats(positions.iter().copied(), true, &what)?;
+        bytes.floats(normals.iter().copied(), true, &what)?;
+        bytes.u32s(indices.iter().copied());
+        let next = meshes.len();
+        let k = *mesh_of.entry(bytes.0.clone()).or_insert(next);
+        if k == next {
+            meshes.push(json!({"vertices": positions.len() / 3, "indices": indices.len()}));
+            block.0.extend(bytes.0);
+        }
+        body_meshes.push(k);
+    }
+
+    // The frames.
+    let frames = &rec.frames;
+    block.floats(frames.iter().map(|f| f.time), true, &|| {
+        "a frame time".into()
+    })?;
+    for f in frames {
+        let what = || format!("the state at t = {}", f.time);
+        block.floats(
+            f.bodies.iter().flat_map(|s| {
+                let q = s.rotation.normalize();
+                [s.position.x, s.position.y, s.position.z, q.x, q.y, q.z, q.w]
+            }),
+            true,
+            &what,
+        )?;
+    }
+    for f in frames {
+        block.floats(f.bodies.iter().map(|s| s.velocity.length()), false, &|| {
+            String::new()
+        })?;
+    }
+    for f in frames {
+        block.floats(
+            f.bodies
+                .iter()
+                .zip(&bodies)
+                .map(|(s, b)| body_energy(b, s, gravity)),
+            false,
+            &String::new,
+        )?;
+    }
+    block.floats(
+        frames
+            .iter()
+            .flat_map(|f| [f.kinetic_energy, f.potential_energy]),
+        false,
+        &String::new,
+    )?;
+
+    // The impacts.
+    let index: HashMap<_, _> = rec
+        .handles
+        .iter()
+        .enumerate()
+        .map(|(i, &h)| (h, i as u32))
+        .collect();
+    let events = impacts(world.events());
+    let body_index = |h| index.get(&h).copied().unwrap_or(NO_BODY);
+    block.floats(
+        events
+            .iter()
+            .flat_map(|e| [e.time, e.point.x, e.point.y, e.point.z, e.impulse.length()]),
+        false,
+        &String::new,
+    )?;
+    block.u32s(
+        events
+            .iter()
+            .flat_map(|e| [body_index(e.a), body_index(e.b)]),
+    );
+
+    let up = if gravity.length() > 0.0 {
+        -gravity.normalize()
+    } else {
+        DVec3::Z
+    };
+    let header = json!({
+        "format": FORMAT,
+        "title": title,
+        "generator": format!("impulse {}", env!("CARGO_PKG_VERSION")),
+        "up": up.to_array(),
+        "gravity": gravity.to_array(),
+        "contact_model": format!("{:?}", scene.desc.contact_model),
+        "bodies": bodies.iter().zip(&rec.names).zip(&body_meshes).map(|((b, name), &mesh)| json!({
+            "name": name,
+            "kind": kind_name(b.kind),
+            "mesh": mesh,
+            "radius": b.r_max,
+        })).collect::<Vec<_>>(),
+        "meshes": meshes,
+        "frames": frames.len(),
+        "events": events.len(),
+        "bytes": block.0.len(),
+    });
+    Ok(page(title, &header.to_string(), &block.0))
+}
+
+/// Text safe inside an HTML element (`&`, `<`, `>` escaped).
+fn html_text(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// The document: markup, style, the header (JSON, `<` escaped so no string can close its
+/// script element), the data block (base64) and the script.
+fn page(title: &str, header: &str, data: &[u8]) -> String {
+    let data = base64::engine::general_purpose::STANDARD.encode(data);
+    let header = header.replace('<', "\\u003c");
+    format!(
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+         <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
+         <title>{} — impulse</title>\n<style>\n{STYLE}</style>\n</head>\n<body>\n{MARKUP}\
+         <script type=\"application/json\" id=\"impulse-header\">{header}</script>\n\
+         <script type=\"application/octet-stream\" id=\"impulse-data\">{data}</script>\n\
+         <script>\n{SCRIPT}</script>\n</body>\n</html>\n",
+        html_text(title)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use impulse_geom::DQuat;
+    use std::path::PathBuf;
+
+    fn scene(file: &str) -> Scene {
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/scenes");
+        Scene::read(&path.join(file)).unwrap()
+    }
+
+    /// Runs `scene` to `until` with the event log on; returns the world and the recording.
+    fn run(scene: &Scene, until: f64) -> (World, Recording) {
+        let mut world = World::from_scene(scene).unwrap();
+        world.set_event_log(true);
+        let rec = impulse_sim::run(&mut world, until, scene.desc.output_rate, |_| {}).unwrap();
+        (world, rec)
+    }
+
+    /// The text of the element `<script … id="{id}">…</script>` of `page`.
+    fn element<'a>(page: &'a str, id: &str) -> &'a str {
+        let open = format!("id=\"{id}\">");
+        let start = page.find(&open).unwrap() + open.len();
+        let end = start + page[start..].find("</script>").unwrap();
+        &page[start..end]
+    }
+
+    /// The page's header and data block, read back as the script reads them.
+    fn read_back(page: &str) -> (serde_json::Value, Vec<u8>) {
+        let header = serde_json::from_str(element(page, "impulse-header")).unwrap();
+        let data = base64::engine::general_purpose::STANDARD
+            .decode(element(page, "impulse-data").trim())
+            .unwrap();
+        (header, data)
+    }
+
+    fn f32_at(data: &[u8], word: usize) -> f32 {
+        f32::from_le_bytes(data[4 * word..4 * word + 4].try_into().unwrap())
+    }
+
+    /// The data block, read back by its documented layout, holds the recorded states: every
+    /// body's position and rotation at the first and last frame to f32 rounding, the frame
+    /// times, the world's energies; bodies of one shape share one mesh; the sections fill the
+    /// block exactly. Pool break: 21 bodies, 4 shapes (table, two rails, ball), impacts.
+    #[test]
+    fn the_data_block_holds_the_recording() {
+        let scene = scene("pool-break.ron");
+        let (world, rec) = run(&scene, 0.2);
+        let page = to_html(&rec, &world, &scene, "pool").unwrap();
+        let (h, data) = read_back(&page);
+        assert_eq!(h["format"], FORMAT);
+        assert_eq!(h["bytes"].as_u64().unwrap() as usize, data.len());
+        let b = rec.names.len();
+        let f = rec.frames.len();
+        let e = h["events"].as_u64().unwrap() as usize;
+        assert!(e > 0, "the break has impacts");
+        let meshes = h["meshes"].as_array().unwrap();
+        assert_eq!(meshes.len(), 4, "table, long rail, short rail, ball");
+        let mut word: usize = meshes
+            .iter()
+            .map(|m| {
+                6 * m["vertices"].as_u64().unwrap() as usize
+                    + m["indices"].as_u64().unwrap() as usize
+            })
+            .sum();
+        let times = word;
+        let poses = times + f;
+        word = poses + 7 * f * b + 2 * f * b;
+        let totals = word;
+        word += 2 * f + 7 * e;
+        assert_eq!(4 * word, data.len(), "sections fill the block");
+        let close = |a: f32, x: f64| (f64::from(a) - x).abs() <= 1e-6 * x.abs().max(1.0);
+        for (k, frame) in [(0, &rec.frames[0]), (f - 1, &rec.frames[f - 1])] {
+            assert!(close(f32_at(&data, times + k), frame.time));
+            assert!(close(f32_at(&data, totals + 2 * k), frame.kinetic_energy));
+            assert!(close(
+                f32_at(&data, totals + 2 * k + 1),
+                frame.potential_energy
+            ));
+            for (i, s) in frame.bodies.iter().enumerate() {
+                let at = poses + 7 * (k * b + i);
+                let got: Vec<f64> = (0..7).map(|c| f64::from(f32_at(&data, at + c))).collect();
+                let p = DVec3::new(got[0], got[1], got[2]);
+                let q = DQuat::from_xyzw(got[3], got[4], got[5], got[6]);
+                assert!(
+                    (p - s.position).length() <= 1e-6,
+                    "{}: {p} vs {}",
+                    rec.names[i],
+                    s.position
+                );
+                assert!(q.dot(s.rotation).abs() >= 1.0 - 1e-6, "{}", rec.names[i]);
+            }
+        }
+        for (i, name) in rec.names.iter().enumerate() {
+            assert_eq!(h["bodies"][i]["name"], name.as_str());
+        }
+    }
+
+    /// Each body's energy, summed over the bodies, is the world's own total at every frame: a
+    /// rattleback (an ellipsoid with point masses, so its own frame is apart from its
+    /// mass-centred body frame) rocking and spinning, where an inertia turned by the wrong
+    /// frame gives a different rotational energy.
+    #[test]
+    fn body_energies_sum_to_the_worlds() {
+        let scene = scene("rattleback.ron");
+        let (world, rec) = run(&scene, 0.3);
+        let bodies: Vec<&Body> = rec
+            .handles
+            .iter()
+            .map(|&h| world.body(h).unwrap())
+            .collect();
+        assert!(
+            bodies.iter().any(|b| b.frame.rotation != DQuat::IDENTITY),
+            "a body whose own frame is turned from its body frame"
+        );
+        for frame in &rec.frames {
+            let sum: f64 = frame
+                .bodies
+                .iter()
+                .zip(&bodies)
+                .map(|(s, b)| body_energy(b, s, world.gravity()))
+                .filter(|e| !e.is_nan())
+                .sum();
+            let total = frame.kinetic_energy + frame.potential_energy;
+            assert!(
+                (sum - total).abs() <= 1e-12 * total.abs().max(frame.kinetic_energy) + 1e-15,
+                "t = {}: bodies {sum}, world {total}",
+                frame.time
+            );
+        }
+    }
+
+    /// A body name that holds markup, quotes and control characters reaches the page intact and
+    /// cannot end its script element early.
+    #[test]
+    fn hostile_names_stay_inside_the_header() {
+        let name = "a</script><b>\"x\u{1}\\";
+        let text = format!(
+            "Scene(name: \"names\", bodies: [Body(name: {:?}, shape: Sphere(radius: 0.1), position: (0.0, 0.0, 1.0))])",
+            name
+        );
+        let scene = Scene {
+            desc: impulse_sim::SceneDesc::from_ron(&text, "names.ron").unwrap(),
+            base_dir: PathBuf::new(),
+        };
+        let (world, rec) = run(&scene, 0.02);
+        let page = to_html(&rec, &world, &scene, "<title>").unwrap();
+        let (h, _) = read_back(&page);
+        assert_eq!(h["bodies"][0]["name"], name);
+        assert_eq!(h["title"], "<title>");
+        assert_eq!(
+            page.matches("</script>").count(),
+            3,
+            "three script elements"
+        );
+        assert!(page.contains("<title>&lt;title&gt; — impulse</title>"));
+    }
+
+    #[test]
+    fn the_file_must_be_html() {
+        assert!(check_path(Path::new("out.html")).is_ok());
+        assert!(check_path(Path::new("out.HTM")).is_ok());
+        assert!(check_path(Path::new("html")).is_err());
+        let e = check_path(Path::new("out.glb")).unwrap_err();
+        assert!(e.contains("out.glb") && e.contains(".html"), "{e}");
+    }
+}
