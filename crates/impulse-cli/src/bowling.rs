@@ -3,7 +3,6 @@
 //! scheduler, in shards (`--shard K/N`, then `impulse bowling merge`).
 
 use std::fmt::Write as _;
-use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -12,6 +11,7 @@ use impulse_sim::bowling::{
     self, AlleyDesc, BIN_WIDTH, BowlingFile, HEAD_ON, Mean, POCKET, SHOULDERS, ThrowSettings,
 };
 
+use crate::progress::Progress;
 use crate::run::line_plot;
 
 /// Bins averaged together for the smoothed curves of the plot (5 bins of 5 mm: 2.5 cm).
@@ -148,15 +148,8 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
             let mine = shard.runs_of(2 * args.throws);
-            let tty = std::io::stderr().is_terminal();
-            let progress = |done: u64| {
-                if tty {
-                    eprint!("\r{done}/{mine} throws");
-                    if done == mine {
-                        eprintln!();
-                    }
-                }
-            };
+            let bar = Progress::count("impulse bowling", mine, "throws");
+            let progress = |done: u64| bar.set(done);
             let outcomes = bowling::run_throws(
                 &alley,
                 &settings,
@@ -167,6 +160,7 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
                 &progress,
             )
             .map_err(|e| e.to_string())?;
+            bar.finish();
             let file = BowlingFile {
                 alley,
                 settings,

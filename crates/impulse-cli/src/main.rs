@@ -22,6 +22,7 @@ mod bowling;
 mod dynamics;
 mod glb;
 mod poses;
+mod progress;
 mod reduce;
 mod run;
 mod study_io;

@@ -13,6 +13,8 @@ use impulse_reduced::{
     ConstructOptions, Mechanism, MechanismDesc, Obstacle, ReducedModel, ReducedSim,
 };
 
+use crate::progress::Progress;
+
 /// Options of `impulse reduce`.
 #[derive(clap::Args)]
 pub struct ReduceArgs {
@@ -188,6 +190,7 @@ fn simulate(
     let mut prev: Option<Vec<Pose>> = None;
     let mut frames: Vec<(f64, Vec<(Pose, Twist)>)> = Vec::new();
     let mut errors: Vec<(f64, f64)> = Vec::new();
+    let progress = Progress::time("impulse reduce", args.until);
     let wall = Instant::now();
     for k in 1..=steps {
         sim.step();
@@ -213,16 +216,12 @@ fn simulate(
                 };
                 errors.push((t, sim.constraint_error(m)));
                 frames.push((t, poses.iter().copied().zip(vel).collect()));
-                if steps >= 10_000 {
-                    eprint!("\rimpulse reduce: t = {t:.3} s of {:.3} s", args.until);
-                }
+                progress.set_time(t);
             }
             prev = Some(poses);
         }
     }
-    if steps >= 10_000 {
-        eprintln!();
-    }
+    progress.finish();
     let wall = wall.elapsed().as_secs_f64();
     if let Some(path) = &args.out {
         write_trajectory(path, &names, &frames)?;

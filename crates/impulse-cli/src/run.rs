@@ -1,18 +1,13 @@
 //! `impulse run`: simulate a scene file, print a summary, write the trajectory and plots.
 
 use std::fmt::Write as _;
-use std::io::{IsTerminal as _, Write as _};
 use std::path::Path;
-use std::time::Instant;
 
 use impulse_sim::{ContactMode, Recording, Scene, World};
 
+use crate::progress::Progress;
 use crate::text;
 
-/// Runs longer than this (wall seconds) show a progress line on stderr.
-const PROGRESS_AFTER_S: f64 = 2.0;
-/// When stderr is not a terminal, a progress line is written at most this often (wall s).
-const PROGRESS_LINE_EVERY_S: f64 = 10.0;
 /// Plot size in SVG user units (pixels).
 const PLOT_WIDTH: f64 = 640.0;
 /// Plot height in SVG user units.
@@ -98,32 +93,12 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         world.set_threads(n).map_err(|e| e.to_string())?;
     }
     world.set_profiling(args.profile);
-    let start = Instant::now();
-    let terminal = std::io::stderr().is_terminal();
-    let (mut shown, mut last_line) = (false, 0.0);
+    let progress = Progress::time("impulse run", until);
     let rec = impulse_sim::run(&mut world, until, scene.desc.output_rate, |t| {
-        let wall = start.elapsed().as_secs_f64();
-        if wall <= PROGRESS_AFTER_S {
-            return;
-        }
-        let line = format!(
-            "  t = {t:.3} / {until} s  ({:.0} %, {wall:.1} s wall)",
-            100.0 * t / until
-        );
-        if terminal {
-            shown = true;
-            eprint!("\r{line}   ");
-            let _ = std::io::stderr().flush();
-        } else if wall - last_line >= PROGRESS_LINE_EVERY_S || t >= until {
-            // Not a terminal (a log file, a pipe): whole lines, now and then.
-            last_line = wall;
-            eprintln!("{line}");
-        }
+        progress.set_time(t);
     })
     .map_err(|e| e.to_string())?;
-    if shown {
-        eprintln!();
-    }
+    progress.finish();
     if let Some(out) = args.out {
         let text = match format_of(out)? {
             Format::Csv => rec.to_csv(),
