@@ -11,8 +11,8 @@ use impulse_sim::bowling::{
     self, AlleyDesc, BIN_WIDTH, BowlingFile, HEAD_ON, Mean, POCKET, SHOULDERS, ThrowSettings,
 };
 
+use crate::plot::{self, Axis};
 use crate::progress::Progress;
-use crate::run::line_plot;
 
 /// Bins averaged together for the smoothed curves of the plot (5 bins of 5 mm: 2.5 cm).
 const SMOOTH_BINS: usize = 5;
@@ -189,17 +189,23 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
         };
         let straight = series(|r| r.straight);
         let hook = series(|r| r.hook);
-        let plot = line_plot(
+        let plot = plot::line_plot(
             "Pins felled against the pin-line crossing (thesis Fig. 7.10)",
-            "ball's x where it crosses the pin line (cm; 0 = head pin, + = right)",
-            "mean pins felled (per 5 mm bin, and running mean over 2.5 cm)",
+            Axis {
+                name: "ball's x at the pin line (0 = head pin, + = right)",
+                unit: "cm",
+            },
+            Axis {
+                name: "mean pins felled",
+                unit: "",
+            },
             &[
                 ("straight, 5 mm".into(), straight.clone()),
                 ("hook, 5 mm".into(), hook.clone()),
                 ("straight, 2.5 cm".into(), smooth(&straight)),
                 ("hook, 2.5 cm".into(), smooth(&hook)),
             ],
-        );
+        )?;
         std::fs::write(path, plot).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     }
     Ok(report(&file, shard, ran.then_some(wall)))

@@ -21,6 +21,7 @@
 mod bowling;
 mod dynamics;
 mod glb;
+mod plot;
 mod poses;
 mod progress;
 mod reduce;
