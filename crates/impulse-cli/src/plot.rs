@@ -45,11 +45,11 @@ const MAX_TICKS: usize = 8;
 /// along y still gets a readable y axis.
 const MIN_SPAN_FRACTION: f64 = 0.02;
 /// Values at or above this (in the axis's unit) get the next SI prefix (k, M, G…), or a power
-/// of ten (×10³…) on an axis without a unit.
+/// of ten (×10³…) on an axis whose unit takes no prefix.
 const PREFIX_ABOVE: f64 = 1e4;
 /// Values all below this get a smaller SI prefix (m, µ, n…), or a power of ten (×10⁻³…).
 const PREFIX_BELOW: f64 = 1e-2;
-/// Units that take SI prefixes.
+/// Units that take SI prefixes (others, cm and erg of the cm, g, s scenes, take a power of ten).
 const SI_UNITS: [&str; 3] = ["s", "m", "J"];
 /// Line colours, in order (the usual ten-colour palette's first eight).
 const COLOURS: [RGBColor; 8] = [
@@ -142,10 +142,11 @@ impl Ticks {
 
     /// The axis title with its (prefixed) unit.
     fn title(&self, axis: Axis<'_>) -> String {
-        if axis.unit.is_empty() && self.prefix.is_empty() {
-            axis.name.to_string()
-        } else {
-            format!("{} ({}{})", axis.name, self.prefix, axis.unit)
+        match (self.prefix, axis.unit) {
+            ("", "") => axis.name.to_string(),
+            (p, "") => format!("{} ({p})", axis.name),
+            (p, u) if p.starts_with('×') => format!("{} ({p} {u})", axis.name),
+            (p, u) => format!("{} ({p}{u})", axis.name),
         }
     }
 }
@@ -178,7 +179,7 @@ impl Ranged for Linear {
 }
 
 /// The SI prefix for values up to `largest` in `unit`, or the power of ten for an axis without
-/// a unit: (the factor to divide by, its symbol).
+/// a unit or with one that takes no prefix (cm, erg): (the factor to divide by, its symbol).
 fn prefix_of(largest: f64, unit: &str) -> (f64, &'static str) {
     const PREFIXES: [(i32, &str); 9] = [
         (-12, "p"),
@@ -191,7 +192,7 @@ fn prefix_of(largest: f64, unit: &str) -> (f64, &'static str) {
         (9, "G"),
         (12, "T"),
     ];
-    /// Powers of ten for an axis without a unit: its title says "(×10⁻⁶)".
+    /// Powers of ten for other axes: the title says "(×10⁻⁶)" or "(×10⁶ erg)".
     const POWERS: [(i32, &str); 9] = [
         (-12, "×10⁻¹²"),
         (-9, "×10⁻⁹"),
@@ -203,12 +204,10 @@ fn prefix_of(largest: f64, unit: &str) -> (f64, &'static str) {
         (9, "×10⁹"),
         (12, "×10¹²"),
     ];
-    let table = if unit.is_empty() {
-        POWERS
-    } else if SI_UNITS.contains(&unit) {
+    let table = if SI_UNITS.contains(&unit) {
         PREFIXES
     } else {
-        return (1.0, "");
+        POWERS
     };
     if largest == 0.0 || (PREFIX_BELOW..PREFIX_ABOVE).contains(&largest) {
         return (1.0, "");
@@ -552,8 +551,9 @@ mod tests {
         assert_eq!(title, "v (s)");
         assert_eq!(labels(-0.001, 0.2, "m").0[0], "-0.05");
         assert_eq!(labels(0.0, 4e-6, "").1, "v (×10⁻⁶)");
-        // No prefix on a unit that does not take one.
-        assert_eq!(labels(0.0, 2e4, "cm").1, "v (cm)");
+        // A power of ten on a unit that takes no prefix.
+        assert_eq!(labels(0.0, 3e8, "erg").1, "v (×10⁶ erg)");
+        assert_eq!(labels(0.0, 2e3, "cm").1, "v (cm)");
     }
 
     /// A zero-width axis is widened; one of no finite value is 0 to 1.
