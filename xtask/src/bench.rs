@@ -197,7 +197,7 @@ pub fn run_bench(options: &Options) -> Result<()> {
     for check in &checks {
         let mine: Vec<&Row> = rows.iter().filter(|r| r.case == check.case).collect();
         let path = out.join(format!("{}.svg", check.case));
-        std::fs::write(&path, plot(check.case, &mine))
+        std::fs::write(&path, plot(check.case, &mine)?)
             .map_err(|e| format!("{}: {e}", path.display()))?;
     }
     println!("wrote {} and one SVG per scene", csv.display());
@@ -291,90 +291,208 @@ fn to_csv(rows: &[Row]) -> String {
     s
 }
 
+/// Size of a scene's plot (SVG user units, pixels).
+const PLOT_SIZE: (u32, u32) = (640, 420);
+/// Space around the frame (pixels); right of it, half the last tick label fits.
+const PLOT_MARGIN: (u32, u32) = (12, 28);
+/// Label areas under and left of the frame: tick labels and axis title (pixels).
+const PLOT_LABEL_AREAS: (u32, u32) = (48, 72);
+/// Font sizes (plotters' units; the SVG's font-size is this / 1.24): title, axis titles, tick
+/// labels and point labels.
+const PLOT_FONTS: (f64, f64, f64) = (20.0, 16.0, 15.0);
+/// Radius of a setting's point, and its label's offset from it (pixels).
+const PLOT_POINT: (u32, i32) = (4, 7);
+/// Line and point colour.
+const PLOT_COLOUR: plotters::style::RGBColor = plotters::style::RGBColor(0x1f, 0x77, 0xb4);
+
+/// A logarithmic axis over whole decades `10^.0 ..= 10^.1`: ticks and grid at the decades,
+/// lighter grid at 2..9 times them. (plotters' own log axis also labels 2, 5… when there is
+/// room, which crowds a short axis.)
+pub(crate) struct Decades(pub i32, pub i32);
+
+impl Decades {
+    /// The decades covering the positive values `v` (at least one decade).
+    pub(crate) fn covering(v: impl Iterator<Item = f64>) -> Decades {
+        let (lo, hi) = v
+            .filter(|x| x.is_finite() && *x > 0.0)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            });
+        if !lo.is_finite() {
+            return Decades(0, 1);
+        }
+        let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        Decades(a, b.max(a + 1))
+    }
+
+    /// A tick label: the power of ten with a superscript exponent (10⁻³).
+    pub(crate) fn label(v: &f64) -> String {
+        const SUPERSCRIPT: [char; 10] = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
+        let k = v.log10().round() as i32;
+        let digits: String = k
+            .unsigned_abs()
+            .to_string()
+            .chars()
+            .map(|c| SUPERSCRIPT[c as usize - '0' as usize])
+            .collect();
+        format!("10{}{digits}", if k < 0 { "⁻" } else { "" })
+    }
+}
+
+impl plotters::coord::ranged1d::Ranged for Decades {
+    type FormatOption = plotters::coord::ranged1d::DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
+        let f = (v.log10() - f64::from(self.0)) / f64::from(self.1 - self.0);
+        limit.0 + (f * f64::from(limit.1 - limit.0)).round() as i32
+    }
+
+    fn key_points<H: plotters::coord::ranged1d::KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        let light = hint.weight().allow_light_points();
+        (self.0..=self.1)
+            .flat_map(|k| {
+                let d = 10f64.powi(k);
+                let m: &[f64] = if light && k < self.1 {
+                    &[2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
+                } else if light {
+                    &[]
+                } else {
+                    &[1.0]
+                };
+                m.iter().map(move |m| m * d).collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        10f64.powi(self.0)..10f64.powi(self.1)
+    }
+}
+
 /// Error against slowdown, log–log, one labelled point per setting.
-fn plot(case: &str, rows: &[&Row]) -> String {
-    let (w, h, m) = (560.0, 380.0, 64.0);
+fn plot(case: &str, rows: &[&Row]) -> Result<String> {
+    use plotters::prelude::*;
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    let err = |e: &dyn std::fmt::Display| format!("{case}: cannot draw the plot: {e}");
     let pts: Vec<(f64, f64, &str)> = rows
         .iter()
         .map(|r| {
             (
-                (r.wall / r.simulated).log10(),
-                r.error.max(PLOT_ERROR_FLOOR).log10(),
+                r.wall / r.simulated,
+                r.error.max(PLOT_ERROR_FLOOR),
                 r.setting,
             )
         })
         .collect();
-    let (mut x0, mut x1) = pts
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(p.0), b.max(p.0))
-        });
-    let (mut y0, mut y1) = pts
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(p.1), b.max(p.1))
-        });
-    (x0, x1) = (x0.floor(), x1.ceil().max(x0.floor() + 1.0));
-    (y0, y1) = (y0.floor(), y1.ceil().max(y0.floor() + 1.0));
-    let sx = |x: f64| m + (x - x0) / (x1 - x0) * (w - 2.0 * m);
-    let sy = |y: f64| h - m - (y - y0) / (y1 - y0) * (h - 2.0 * m);
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n<text x=\"{}\" y=\"20\" text-anchor=\"middle\" font-size=\"14\">{case}: error against slowdown</text>\n<rect x=\"{m}\" y=\"{m}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888\"/>\n",
-        w / 2.0,
-        w - 2.0 * m,
-        h - 2.0 * m
-    );
-    let mut k = x0;
-    while k <= x1 {
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">1e{k}</text>",
-            sx(k),
-            h - m + 16.0
-        );
-        k += 1.0;
+    let font = |size: f64| -> TextStyle<'static> { ("sans-serif", size).into_font().into() };
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!("{case}: error against slowdown"),
+                font(PLOT_FONTS.0),
+            )
+            .margin(PLOT_MARGIN.0)
+            .margin_right(PLOT_MARGIN.1)
+            .x_label_area_size(PLOT_LABEL_AREAS.0)
+            .y_label_area_size(PLOT_LABEL_AREAS.1)
+            .build_cartesian_2d(
+                Decades::covering(pts.iter().map(|p| p.0)),
+                Decades::covering(pts.iter().map(|p| p.1)),
+            )
+            .map_err(|e| err(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc("slowdown (wall time / simulated time)")
+            .y_desc("error (largest relative deviation)")
+            .axis_desc_style(font(PLOT_FONTS.1))
+            .label_style(font(PLOT_FONTS.2))
+            .x_label_formatter(&Decades::label)
+            .y_label_formatter(&Decades::label)
+            .bold_line_style(RGBColor(0xcc, 0xcc, 0xcc))
+            .light_line_style(RGBColor(0xee, 0xee, 0xee))
+            .draw()
+            .map_err(|e| err(&e))?;
+        chart
+            .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1)), PLOT_COLOUR))
+            .map_err(|e| err(&e))?;
+        let (radius, offset) = PLOT_POINT;
+        let middle = |d: Decades| 10f64.powf(0.5 * f64::from(d.0 + d.1));
+        let x_middle = middle(Decades::covering(pts.iter().map(|p| p.0)));
+        let y_middle = middle(Decades::covering(pts.iter().map(|p| p.1)));
+        chart
+            .draw_series(pts.iter().map(|&(x, y, name)| {
+                // A name goes toward the middle of the frame from its point (right of a point
+                // in the left half, under a point in the upper half): it stays inside.
+                let (dx, h) = if x < x_middle {
+                    (offset, HPos::Left)
+                } else {
+                    (-offset, HPos::Right)
+                };
+                let (dy, v) = if y < y_middle {
+                    (-offset, VPos::Bottom)
+                } else {
+                    (offset, VPos::Top)
+                };
+                let style = font(PLOT_FONTS.2).pos(Pos::new(h, v));
+                EmptyElement::at((x, y))
+                    + Circle::new((0, 0), radius, PLOT_COLOUR.filled())
+                    + Text::new(name, (dx, dy), style)
+            }))
+            .map_err(|e| err(&e))?;
+        root.present().map_err(|e| err(&e))?;
     }
-    let mut k = y0;
-    while k <= y1 {
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">1e{k}</text>",
-            m - 4.0,
-            sy(k) + 4.0
-        );
-        k += 1.0;
+    Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bench row of one setting: slowdown `wall` (1 s simulated) and `error`.
+    fn row(setting: &'static str, wall: f64, error: f64) -> Row {
+        Row {
+            case: "case",
+            headline: "",
+            setting,
+            epsilon: 1e-4,
+            simulated: 1.0,
+            wall,
+            thesis: None,
+            error,
+            all_pass: true,
+            events: 0,
+        }
     }
-    let _ = writeln!(
-        s,
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">slowdown (wall / simulated)</text>",
-        w / 2.0,
-        h - 16.0
-    );
-    let _ = writeln!(
-        s,
-        "<text x=\"16\" y=\"{0}\" text-anchor=\"middle\" transform=\"rotate(-90 16 {0})\">error (largest relative deviation)</text>",
-        h / 2.0
-    );
-    let line: Vec<String> = pts
-        .iter()
-        .map(|p| format!("{:.1},{:.1}", sx(p.0), sy(p.1)))
-        .collect();
-    let _ = writeln!(
-        s,
-        "<polyline fill=\"none\" stroke=\"#1f77b4\" points=\"{}\"/>",
-        line.join(" ")
-    );
-    for p in &pts {
-        let _ = writeln!(
-            s,
-            "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"3.5\" fill=\"#1f77b4\"/><text x=\"{:.1}\" y=\"{:.1}\">{}</text>",
-            sx(p.0),
-            sy(p.1),
-            sx(p.0) + 6.0,
-            sy(p.1) - 6.0,
-            p.2
-        );
+
+    /// The plot's axes are logarithmic over whole decades, labelled 10ᵏ, and each setting's
+    /// point is named; an error of 0 sits at the floor.
+    #[test]
+    fn the_plot_is_log_log_with_named_points() {
+        let rows = [
+            row("coarse", 0.05, 3e-3),
+            row("default", 0.4, 2e-6),
+            row("fine", 7.0, 0.0),
+        ];
+        let svg = plot("case", &rows.iter().collect::<Vec<_>>()).unwrap();
+        if let Some(dir) = std::env::var_os("XTASK_PLOT_DIR") {
+            std::fs::write(std::path::Path::new(&dir).join("bench.svg"), &svg).unwrap();
+        }
+        // Slowdown 10⁻² … 10¹, error 10⁻¹⁶ (the floor) … 10⁻².
+        for label in ["10⁻²", "10⁻¹", "10⁰", "10¹", "10⁻¹⁶", "10⁻⁸"] {
+            assert!(svg.contains(&format!("\n{label}\n")), "no tick {label}");
+        }
+        assert!(!svg.contains("\n10²\n"), "the x axis goes past 10¹");
+        for name in ["coarse", "default", "fine"] {
+            assert!(
+                svg.contains(&format!("\n{name}\n")),
+                "no point named {name}"
+            );
+        }
+        assert_eq!(Decades::covering([1.0].into_iter()).1, 1);
+        assert_eq!(Decades::label(&1e-3), "10⁻³");
     }
-    s.push_str("</svg>\n");
-    s
 }

@@ -475,7 +475,7 @@ pub fn run(out: &Path) -> Result<()> {
                 .join(", ")
         );
         write(out, &format!("fig7-{name}.csv"), &csv)?;
-        write(out, &format!("fig7-{name}.svg"), &plot(name, &rows))?;
+        write(out, &format!("fig7-{name}.svg"), &plot(name, &rows)?)?;
     }
     println!(
         "\nwrote table1.csv, table2.csv, fig7-*.csv, fig7-*.svg to {}",
@@ -489,9 +489,26 @@ fn write(dir: &Path, name: &str, text: &str) -> Result<()> {
     std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
-/// Fig. 7 as an SVG: constraint error against displacement, single (red) and blended (blue).
-fn plot(name: &str, rows: &[Fig7Row]) -> String {
-    let (w, h, m) = (560.0, 360.0, 50.0);
+/// Size of a Fig. 7 plot (SVG user units, pixels).
+const PLOT_SIZE: (u32, u32) = (640, 420);
+/// Space around the frame (pixels); right of it, half the last tick label fits.
+const PLOT_MARGIN: (u32, u32) = (12, 28);
+/// Label areas under and left of the frame: tick labels and axis title (pixels).
+const PLOT_LABEL_AREAS: (u32, u32) = (48, 72);
+/// Font sizes (plotters' units; the SVG's font-size is this / 1.24): title, axis titles, tick
+/// and legend labels.
+const PLOT_FONTS: (f64, f64, f64) = (20.0, 16.0, 15.0);
+/// Width of the legend's line samples and the space after them (pixels).
+const PLOT_LEGEND_AREA: i32 = 36;
+/// Tick labels are rounded to this many decimals (plotters' ticks are 1, 2 or 5 × 10^k; this
+/// only hides binary rounding, 0.30000000000000004).
+const PLOT_LABEL_DECIMALS: i32 = 9;
+
+/// Fig. 7 as an SVG: constraint error against displacement, single (red) and blended (blue),
+/// each against its own end effector's displacement.
+fn plot(name: &str, rows: &[Fig7Row]) -> Result<String> {
+    use plotters::prelude::*;
+    let err = |e: &dyn std::fmt::Display| format!("fig7-{name}: cannot draw the plot: {e}");
     let xmax = rows
         .iter()
         .map(|r| r.single_displacement.max(r.blended_displacement))
@@ -502,39 +519,117 @@ fn plot(name: &str, rows: &[Fig7Row]) -> String {
         .map(|r| r.single.max(r.blended))
         .fold(0.0, f64::max)
         .max(1e-12);
-    let px = |x: f64| m + (w - 2.0 * m) * x / xmax;
-    let py = |y: f64| h - m - (h - 2.0 * m) * y / ymax;
-    // Each curve against its own end effector's displacement.
-    let line = |x: fn(&Fig7Row) -> f64, f: fn(&Fig7Row) -> f64, colour: &str| {
-        let pts: Vec<String> = rows
-            .iter()
-            .map(|r| format!("{:.1},{:.1}", px(x(r)), py(f(r))))
-            .collect();
-        format!(
-            "<polyline fill=\"none\" stroke=\"{colour}\" stroke-width=\"2\" points=\"{}\"/>\n",
-            pts.join(" ")
-        )
+    let font = |size: f64| -> TextStyle<'static> { ("sans-serif", size).into_font().into() };
+    let label = |v: &f64| {
+        let scale = 10f64.powi(PLOT_LABEL_DECIMALS);
+        format!("{}", (v * scale).round() / scale)
     };
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n<text x=\"{}\" y=\"20\" text-anchor=\"middle\" font-size=\"14\">{name}: relative constraint error against relative displacement</text>\n<rect x=\"{m}\" y=\"{m}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888\"/>\n",
-        w / 2.0,
-        w - 2.0 * m,
-        h - 2.0 * m
-    );
-    s += &line(|r| r.single_displacement, |r| r.single, "#c33");
-    s += &line(|r| r.blended_displacement, |r| r.blended, "#33c");
-    let _ = write!(
-        s,
-        "<text x=\"{m}\" y=\"{}\">0</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{xmax:.2}</text>\n<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{ymax:.2e}</text>\n<text x=\"{}\" y=\"{}\" fill=\"#c33\">single model</text><text x=\"{}\" y=\"{}\" fill=\"#33c\">blended</text>\n</svg>\n",
-        h - m + 15.0,
-        w - m,
-        h - m + 15.0,
-        m - 4.0,
-        m + 10.0,
-        m + 10.0,
-        m + 20.0,
-        m + 10.0,
-        m + 35.0
-    );
-    s
+    /// A curve: its name, colour, and (x, y) of a row.
+    type Curve = (&'static str, RGBColor, fn(&Fig7Row) -> (f64, f64));
+    let curves: [Curve; 2] = [
+        ("single model", RGBColor(0xcc, 0x33, 0x33), |r| {
+            (r.single_displacement, r.single)
+        }),
+        ("blended", RGBColor(0x33, 0x33, 0xcc), |r| {
+            (r.blended_displacement, r.blended)
+        }),
+    ];
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!("{name}: constraint error against displacement"),
+                font(PLOT_FONTS.0),
+            )
+            .margin(PLOT_MARGIN.0)
+            .margin_right(PLOT_MARGIN.1)
+            .x_label_area_size(PLOT_LABEL_AREAS.0)
+            .y_label_area_size(PLOT_LABEL_AREAS.1)
+            .build_cartesian_2d(0.0..xmax, 0.0..ymax)
+            .map_err(|e| err(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc("relative end-effector displacement ‖(v/r, ω/π)‖")
+            .y_desc("relative constraint error")
+            .axis_desc_style(font(PLOT_FONTS.1))
+            .label_style(font(PLOT_FONTS.2))
+            .x_label_formatter(&label)
+            .y_label_formatter(&label)
+            .bold_line_style(RGBColor(0xdd, 0xdd, 0xdd))
+            .light_line_style(WHITE)
+            .draw()
+            .map_err(|e| err(&e))?;
+        for (title, colour, point) in curves {
+            chart
+                .draw_series(LineSeries::new(
+                    rows.iter().map(point),
+                    colour.stroke_width(2),
+                ))
+                .map_err(|e| err(&e))?
+                .label(title)
+                .legend(move |(x, y)| {
+                    PathElement::new(
+                        vec![(x, y), (x + PLOT_LEGEND_AREA - PLOT_MARGIN.0 as i32, y)],
+                        colour.stroke_width(2),
+                    )
+                });
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .margin(PLOT_MARGIN.0)
+            .legend_area_size(PLOT_LEGEND_AREA)
+            .label_font(font(PLOT_FONTS.2))
+            .background_style(WHITE)
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| err(&e))?;
+        root.present().map_err(|e| err(&e))?;
+    }
+    Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Fig. 7's plot: both curves in the legend, round tick labels up to the largest values.
+    #[test]
+    fn the_fig7_plot_has_round_ticks_and_a_legend() {
+        let rows: Vec<Fig7Row> = (0..=8)
+            .map(|k| {
+                let d = 0.15 * f64::from(k);
+                Fig7Row {
+                    load: 40.0 * f64::from(k),
+                    displacement: d,
+                    single_displacement: d,
+                    blended_displacement: 0.98 * d,
+                    single: 0.12 * d,
+                    blended: 0.002 * d,
+                    single_pose: 0.0,
+                    blended_pose: 0.0,
+                }
+            })
+            .collect();
+        let svg = plot("y", &rows).unwrap();
+        if let Some(dir) = std::env::var_os("XTASK_PLOT_DIR") {
+            std::fs::write(std::path::Path::new(&dir).join("fig7.svg"), &svg).unwrap();
+        }
+        for label in ["\nsingle model\n", "\nblended\n", "\n0.1\n", "\n1.2\n"] {
+            assert!(svg.contains(label), "no {label:?}");
+        }
+        // Each text's content is the line after its <text …> tag.
+        let texts: Vec<&str> = svg
+            .lines()
+            .zip(svg.lines().skip(1))
+            .filter(|(tag, _)| tag.starts_with("<text"))
+            .map(|(_, text)| text)
+            .collect();
+        assert!(
+            texts.iter().all(|t| t.len() <= 60 && !t.contains("0000")),
+            "an unrounded tick label: {texts:?}"
+        );
+    }
 }

@@ -3,7 +3,6 @@
 //! scheduler, in shards (`--shard K/N`, then `impulse bowling merge`).
 
 use std::fmt::Write as _;
-use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -12,7 +11,8 @@ use impulse_sim::bowling::{
     self, AlleyDesc, BIN_WIDTH, BowlingFile, HEAD_ON, Mean, POCKET, SHOULDERS, ThrowSettings,
 };
 
-use crate::run::line_plot;
+use crate::plot::{self, Axis};
+use crate::progress::Progress;
 
 /// Bins averaged together for the smoothed curves of the plot (5 bins of 5 mm: 2.5 cm).
 const SMOOTH_BINS: usize = 5;
@@ -148,15 +148,8 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
             let mine = shard.runs_of(2 * args.throws);
-            let tty = std::io::stderr().is_terminal();
-            let progress = |done: u64| {
-                if tty {
-                    eprint!("\r{done}/{mine} throws");
-                    if done == mine {
-                        eprintln!();
-                    }
-                }
-            };
+            let bar = Progress::count("impulse bowling", mine, "throws");
+            let progress = |done: u64| bar.set(done);
             let outcomes = bowling::run_throws(
                 &alley,
                 &settings,
@@ -167,6 +160,7 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
                 &progress,
             )
             .map_err(|e| e.to_string())?;
+            bar.finish();
             let file = BowlingFile {
                 alley,
                 settings,
@@ -195,17 +189,23 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
         };
         let straight = series(|r| r.straight);
         let hook = series(|r| r.hook);
-        let plot = line_plot(
+        let plot = plot::line_plot(
             "Pins felled against the pin-line crossing (thesis Fig. 7.10)",
-            "ball's x where it crosses the pin line (cm; 0 = head pin, + = right)",
-            "mean pins felled (per 5 mm bin, and running mean over 2.5 cm)",
+            Axis {
+                name: "ball's x at the pin line (0 = head pin, + = right)",
+                unit: "cm",
+            },
+            Axis {
+                name: "mean pins felled",
+                unit: "",
+            },
             &[
                 ("straight, 5 mm".into(), straight.clone()),
                 ("hook, 5 mm".into(), hook.clone()),
                 ("straight, 2.5 cm".into(), smooth(&straight)),
                 ("hook, 2.5 cm".into(), smooth(&hook)),
             ],
-        );
+        )?;
         std::fs::write(path, plot).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     }
     Ok(report(&file, shard, ran.then_some(wall)))

@@ -3,11 +3,12 @@
 //! parallel and, for a batch scheduler, in shards (`--shard K/N`, then `impulse poses merge`).
 
 use std::fmt::Write as _;
-use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use impulse_sim::poses::{self, DropSettings, PosePart, Shard, StudyFile};
+
+use crate::progress::Progress;
 
 /// Options of `impulse poses`.
 #[derive(clap::Args)]
@@ -149,19 +150,13 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
             let mine = shard.runs_of(args.drops);
-            let tty = std::io::stderr().is_terminal();
-            let progress = |done: u64| {
-                if tty && (done == mine || done % 10 == 0) {
-                    eprint!("\r{done}/{mine} drops");
-                    if done == mine {
-                        eprintln!();
-                    }
-                }
-            };
+            let bar = Progress::count("impulse poses", mine, "drops");
+            let progress = |done: u64| bar.set(done);
             let outcomes = poses::run_drops(
                 &part, &settings, args.seed, args.drops, shard, threads, &progress,
             )
             .map_err(|e| e.to_string())?;
+            bar.finish();
             let file = StudyFile {
                 part: part.name.clone(),
                 settings,

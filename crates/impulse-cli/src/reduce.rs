@@ -13,6 +13,9 @@ use impulse_reduced::{
     ConstructOptions, Mechanism, MechanismDesc, Obstacle, ReducedModel, ReducedSim,
 };
 
+use crate::plot::{self, Axis};
+use crate::progress::Progress;
+
 /// Options of `impulse reduce`.
 #[derive(clap::Args)]
 pub struct ReduceArgs {
@@ -188,6 +191,7 @@ fn simulate(
     let mut prev: Option<Vec<Pose>> = None;
     let mut frames: Vec<(f64, Vec<(Pose, Twist)>)> = Vec::new();
     let mut errors: Vec<(f64, f64)> = Vec::new();
+    let progress = Progress::time("impulse reduce", args.until);
     let wall = Instant::now();
     for k in 1..=steps {
         sim.step();
@@ -213,16 +217,12 @@ fn simulate(
                 };
                 errors.push((t, sim.constraint_error(m)));
                 frames.push((t, poses.iter().copied().zip(vel).collect()));
-                if steps >= 10_000 {
-                    eprint!("\rimpulse reduce: t = {t:.3} s of {:.3} s", args.until);
-                }
+                progress.set_time(t);
             }
             prev = Some(poses);
         }
     }
-    if steps >= 10_000 {
-        eprintln!();
-    }
+    progress.finish();
     let wall = wall.elapsed().as_secs_f64();
     if let Some(path) = &args.out {
         write_trajectory(path, &names, &frames)?;
@@ -230,7 +230,7 @@ fn simulate(
     if let Some(dir) = &args.plot {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         let path = dir.join("error.svg");
-        std::fs::write(&path, plot_error(&errors))
+        std::fs::write(&path, plot_error(&errors)?)
             .map_err(|e| format!("{}: {e}", path.display()))?;
     }
     let max_err = errors.iter().map(|e| e.1).fold(0.0, f64::max);
@@ -291,28 +291,18 @@ fn write_trajectory(
     std::fs::write(path, s).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-fn plot_error(errors: &[(f64, f64)]) -> String {
-    let (w, h, m) = (560.0, 300.0, 50.0);
-    let tmax = errors.last().map_or(1.0, |e| e.0).max(1e-12);
-    let ymax = errors.iter().map(|e| e.1).fold(0.0, f64::max).max(1e-15);
-    let pts: Vec<String> = errors
-        .iter()
-        .map(|(t, e)| {
-            format!(
-                "{:.1},{:.1}",
-                m + (w - 2.0 * m) * t / tmax,
-                h - m - (h - 2.0 * m) * e / ymax
-            )
-        })
-        .collect();
-    format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n<text x=\"{}\" y=\"20\" text-anchor=\"middle\">relative constraint error (per-step estimate) against time</text>\n<polyline fill=\"none\" stroke=\"#33c\" stroke-width=\"2\" points=\"{}\"/>\n<text x=\"{m}\" y=\"{}\">0 s</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{tmax:.3} s</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{ymax:.2e}</text>\n</svg>\n",
-        w / 2.0,
-        pts.join(" "),
-        h - m + 15.0,
-        w - m,
-        h - m + 15.0,
-        m - 4.0,
-        m + 10.0
+/// The relative constraint error against time (`--plot DIR` writes it as `error.svg`).
+fn plot_error(errors: &[(f64, f64)]) -> Result<String, String> {
+    plot::line_plot(
+        "relative constraint error (per-step estimate) against time",
+        Axis {
+            name: "time",
+            unit: "s",
+        },
+        Axis {
+            name: "relative constraint error",
+            unit: "",
+        },
+        &[("constraint error".into(), errors.to_vec())],
     )
 }

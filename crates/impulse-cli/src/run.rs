@@ -1,24 +1,13 @@
 //! `impulse run`: simulate a scene file, print a summary, write the trajectory and plots.
 
 use std::fmt::Write as _;
-use std::io::{IsTerminal as _, Write as _};
 use std::path::Path;
-use std::time::Instant;
 
 use impulse_sim::{ContactMode, Recording, Scene, World};
 
+use crate::plot;
+use crate::progress::Progress;
 use crate::text;
-
-/// Runs longer than this (wall seconds) show a progress line on stderr.
-const PROGRESS_AFTER_S: f64 = 2.0;
-/// When stderr is not a terminal, a progress line is written at most this often (wall s).
-const PROGRESS_LINE_EVERY_S: f64 = 10.0;
-/// Plot size in SVG user units (pixels).
-const PLOT_WIDTH: f64 = 640.0;
-/// Plot height in SVG user units.
-const PLOT_HEIGHT: f64 = 400.0;
-/// Margin around a plot's data area, for the axis labels.
-const PLOT_MARGIN: f64 = 56.0;
 
 /// What `impulse run` was asked to do.
 pub struct RunArgs<'a> {
@@ -106,32 +95,12 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
     world.set_profiling(args.profile);
     // The page shows the impacts: keep them all.
     world.set_event_log(args.html.is_some());
-    let start = Instant::now();
-    let terminal = std::io::stderr().is_terminal();
-    let (mut shown, mut last_line) = (false, 0.0);
+    let progress = Progress::time("impulse run", until);
     let rec = impulse_sim::run(&mut world, until, scene.desc.output_rate, |t| {
-        let wall = start.elapsed().as_secs_f64();
-        if wall <= PROGRESS_AFTER_S {
-            return;
-        }
-        let line = format!(
-            "  t = {t:.3} / {until} s  ({:.0} %, {wall:.1} s wall)",
-            100.0 * t / until
-        );
-        if terminal {
-            shown = true;
-            eprint!("\r{line}   ");
-            let _ = std::io::stderr().flush();
-        } else if wall - last_line >= PROGRESS_LINE_EVERY_S || t >= until {
-            // Not a terminal (a log file, a pipe): whole lines, now and then.
-            last_line = wall;
-            eprintln!("{line}");
-        }
+        progress.set_time(t);
     })
     .map_err(|e| e.to_string())?;
-    if shown {
-        eprintln!();
-    }
+    progress.finish();
     if let Some(out) = args.out {
         let text = match format_of(out)? {
             Format::Csv => rec.to_csv(),
@@ -149,10 +118,10 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         std::fs::create_dir_all(dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
         let energy = dir.join("energy.svg");
-        std::fs::write(&energy, energy_plot(&rec, &scene))
+        std::fs::write(&energy, plot::energy_plot(&rec, &scene)?)
             .map_err(|e| format!("cannot write {}: {e}", energy.display()))?;
         let paths = dir.join("paths.svg");
-        std::fs::write(&paths, paths_plot(&rec, &world))
+        std::fs::write(&paths, plot::paths_plot(&rec, &world, &scene)?)
             .map_err(|e| format!("cannot write {}: {e}", paths.display()))?;
     }
     let mut text = summary(&scene, &rec, until);
@@ -308,180 +277,6 @@ fn penetration_verdict(depth: f64, eps: f64) -> &'static str {
     } else {
         "yes, beyond ε_c"
     }
-}
-
-/// A line plot: series of (x, y) points with a title and axis names.
-pub(crate) fn line_plot(
-    title: &str,
-    x_name: &str,
-    y_name: &str,
-    series: &[(String, Vec<(f64, f64)>)],
-) -> String {
-    let pts = series.iter().flat_map(|(_, p)| p.iter());
-    let (mut x0, mut x1, mut y0, mut y1) = (
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    );
-    for &(x, y) in pts {
-        if x.is_finite() && y.is_finite() {
-            x0 = x0.min(x);
-            x1 = x1.max(x);
-            y0 = y0.min(y);
-            y1 = y1.max(y);
-        }
-    }
-    if !(x0.is_finite() && y0.is_finite()) {
-        (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
-    }
-    if x1 - x0 <= 0.0 {
-        x1 = x0 + 1.0;
-    }
-    if y1 - y0 <= 0.0 {
-        y1 = y0 + 1.0;
-    }
-    let (w, h, m) = (PLOT_WIDTH, PLOT_HEIGHT, PLOT_MARGIN);
-    let sx = |x: f64| m + (x - x0) / (x1 - x0) * (w - 2.0 * m);
-    let sy = |y: f64| h - m - (y - y0) / (y1 - y0) * (h - 2.0 * m);
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n"
-    );
-    let _ = writeln!(
-        s,
-        "<text x=\"{}\" y=\"18\" text-anchor=\"middle\" font-size=\"14\">{}</text>",
-        w / 2.0,
-        xml(title)
-    );
-    let _ = writeln!(
-        s,
-        "<rect x=\"{m}\" y=\"{m}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888\"/>",
-        w - 2.0 * m,
-        h - 2.0 * m
-    );
-    for k in 0..=4 {
-        let f = f64::from(k) / 4.0;
-        let (xv, yv) = (x0 + f * (x1 - x0), y0 + f * (y1 - y0));
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{xv:.3e}</text>",
-            sx(xv),
-            h - m + 16.0
-        );
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{yv:.3e}</text>",
-            m - 4.0,
-            sy(yv) + 4.0
-        );
-    }
-    let _ = writeln!(
-        s,
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
-        w / 2.0,
-        h - 12.0,
-        xml(x_name)
-    );
-    let _ = writeln!(
-        s,
-        "<text x=\"14\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 14 {})\">{}</text>",
-        h / 2.0,
-        h / 2.0,
-        xml(y_name)
-    );
-    const COLOURS: [&str; 8] = [
-        "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
-    ];
-    for (k, (name, p)) in series.iter().enumerate() {
-        let colour = COLOURS[k % COLOURS.len()];
-        let mut d = String::new();
-        for &(x, y) in p {
-            if x.is_finite() && y.is_finite() {
-                let _ = write!(d, "{:.2},{:.2} ", sx(x), sy(y));
-            }
-        }
-        let _ = writeln!(
-            s,
-            "<polyline fill=\"none\" stroke=\"{colour}\" stroke-width=\"1.2\" points=\"{d}\"/>"
-        );
-        if series.len() <= COLOURS.len() * 2 {
-            let _ = writeln!(
-                s,
-                "<text x=\"{:.1}\" y=\"{:.1}\" fill=\"{colour}\">{}</text>",
-                w - m + 4.0,
-                m + 12.0 * k as f64 + 10.0,
-                xml(name)
-            );
-        }
-    }
-    s.push_str("</svg>\n");
-    s
-}
-
-fn xml(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
-fn energy_plot(rec: &Recording, scene: &Scene) -> String {
-    let ke: Vec<(f64, f64)> = rec
-        .frames
-        .iter()
-        .map(|f| (f.time, f.kinetic_energy))
-        .collect();
-    let total: Vec<(f64, f64)> = rec
-        .frames
-        .iter()
-        .map(|f| (f.time, f.kinetic_energy + f.potential_energy))
-        .collect();
-    line_plot(
-        &format!("energy: {}", scene.desc.name),
-        "time",
-        "energy",
-        &[
-            ("kinetic".into(), ke),
-            ("kinetic + potential".into(), total),
-        ],
-    )
-}
-
-/// Paths of the dynamic bodies' centres of mass, projected on the plane of the two axes along
-/// which they move most.
-fn paths_plot(rec: &Recording, world: &World) -> String {
-    let dynamic: Vec<usize> = (0..rec.names.len())
-        .filter(|&i| world.body(rec.handles[i]).is_some_and(|b| b.is_dynamic()))
-        .collect();
-    let mut spread = [0.0f64; 3];
-    for &i in &dynamic {
-        for (ax, spread) in spread.iter_mut().enumerate() {
-            let (lo, hi) =
-                rec.frames
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), f| {
-                        let x = f.bodies[i].position[ax];
-                        (l.min(x), h.max(x))
-                    });
-            *spread = spread.max(hi - lo);
-        }
-    }
-    let mut axes = [0usize, 1, 2];
-    axes.sort_by(|a, b| spread[*b].total_cmp(&spread[*a]));
-    let (a, b) = (axes[0].min(axes[1]), axes[0].max(axes[1]));
-    let names = ["x", "y", "z"];
-    let series: Vec<(String, Vec<(f64, f64)>)> = dynamic
-        .iter()
-        .map(|&i| {
-            (
-                rec.names[i].clone(),
-                rec.frames
-                    .iter()
-                    .map(|f| (f.bodies[i].position[a], f.bodies[i].position[b]))
-                    .collect(),
-            )
-        })
-        .collect();
-    line_plot("centre-of-mass paths", names[a], names[b], &series)
 }
 
 #[cfg(test)]
