@@ -1,9 +1,11 @@
 //! `cargo xtask viewer` (a step of `ci`): the pages of `impulse run --html`, opened in headless
 //! Chromium ([`crate::browser`]) and checked from the outside.
 //!
-//! For the bundled dominos, pool-break and rattleback scenes, and a generated scene of
-//! [`FIFTY`] bodies tumbling for [`FIFTY_SECONDS`] s, the step runs `impulse run <scene> --html
-//! <page> --out <csv>` and then, for each page:
+//! For the bundled dominos, pool-break and rattleback scenes, a multibody (the URDF arm), a
+//! FORK⁻¹S reduced mechanism (`impulse reduce` of the six-legged robot falling onto the
+//! ground) and a generated scene of [`FIFTY`] bodies tumbling for [`FIFTY_SECONDS`] s, the step
+//! runs `impulse run <scene> --html <page> --out <csv>` (or `impulse reduce`) and then, for
+//! each page:
 //! - it opens with no console error, uncaught exception or error log entry, and holds as many
 //!   frames as the CSV;
 //! - **the bodies are drawn where the trajectory says**: at the first and the last frame, each
@@ -48,6 +50,8 @@ pub const MAX_PAGE_BYTES: u64 = 10 * 1024 * 1024;
 pub const MIN_FPS: f64 = 30.0;
 /// Wall seconds of playback over which the frame rate is measured.
 pub const PLAY_SECONDS: f64 = 3.0;
+/// Wall seconds of playback before the frame rate is measured.
+pub const WARM_UP_SECONDS: f64 = 1.0;
 /// The page's size in CSS pixels (device scale 1).
 pub const PAGE: (u32, u32) = (1200, 750);
 /// How far (pixels) from a body's projected centre its highlight may be found.
@@ -72,8 +76,22 @@ pub const MIN_CHANGED_PIXELS: u64 = 100;
 /// One page to check.
 struct Page {
     name: &'static str,
+    /// A scene file for `impulse run`, or a mechanism file for `impulse reduce`.
     scene: PathBuf,
+    /// `impulse reduce` with these arguments (after the mechanism), not `impulse run`.
+    reduce: Option<&'static [&'static str]>,
     frame_rate: bool,
+}
+
+impl Page {
+    fn run(name: &'static str, scene: PathBuf) -> Self {
+        Self {
+            name,
+            scene,
+            reduce: None,
+            frame_rate: false,
+        }
+    }
 }
 
 /// Runs the viewer test.
@@ -100,37 +118,36 @@ pub fn run() -> Result<()> {
     std::fs::write(&fifty, fifty_scene())
         .map_err(|e| format!("cannot write {}: {e}", fifty.display()))?;
     let scenes = root.join("fixtures/scenes");
+    let mechanisms = root.join("fixtures/mechanisms");
     let pages = [
+        Page::run("dominos", scenes.join("dominos.ron")),
+        Page::run("pool-break", scenes.join("pool-break.ron")),
+        Page::run("rattleback", scenes.join("rattleback.ron")),
+        // A multibody: its links are bodies of the page.
+        Page::run("urdf-arm", scenes.join("urdf-arm.ron")),
+        // A FORK⁻¹S reduced mechanism on a free base, falling onto the ground.
         Page {
-            name: "dominos",
-            scene: scenes.join("dominos.ron"),
-            frame_rate: false,
+            reduce: Some(&["--until", "0.5", "--ground", "-0.3"]),
+            ..Page::run("legged", mechanisms.join("legged-6.ron"))
         },
         Page {
-            name: "pool-break",
-            scene: scenes.join("pool-break.ron"),
-            frame_rate: false,
-        },
-        Page {
-            name: "rattleback",
-            scene: scenes.join("rattleback.ron"),
-            frame_rate: false,
-        },
-        Page {
-            name: "fifty",
-            scene: fifty,
             frame_rate: true,
+            ..Page::run("fifty", fifty)
         },
     ];
     let mut browser = Browser::start(&program, &out.join("chromium"), PAGE.0, PAGE.1)?;
     let mut report = String::new();
+    let mut failed = Vec::new();
     for page in &pages {
         let started = Instant::now();
         let html = out.join(format!("{}.html", page.name));
         let csv = out.join(format!("{}.csv", page.name));
-        let run = Command::new(&impulse)
-            .arg("run")
-            .arg(&page.scene)
+        let mut command = Command::new(&impulse);
+        match page.reduce {
+            None => command.arg("run").arg(&page.scene),
+            Some(args) => command.arg("reduce").arg(&page.scene).args(args),
+        };
+        let run = command
             .arg("--html")
             .arg(&html)
             .arg("--out")
@@ -145,8 +162,14 @@ pub fn run() -> Result<()> {
             ));
         }
         let ran = started.elapsed();
-        let line = check_page(&mut browser, page, &html, &csv, &out)
-            .map_err(|e| format!("viewer, {}: {e}", page.name))?;
+        // Every page is checked; the step fails after the report if one failed.
+        let line = match check_page(&mut browser, page, &html, &csv, &out) {
+            Ok(line) => line,
+            Err(e) => {
+                failed.push(page.name);
+                format!("FAILED: {e}")
+            }
+        };
         let _ = writeln!(
             report,
             "  {:<11} {line} (run {:.1} s, checks {:.1} s)",
@@ -156,7 +179,14 @@ pub fn run() -> Result<()> {
         );
     }
     print!("viewer pages (Chromium {}):\n{report}", version(&program));
-    Ok(())
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "viewer: the pages of {} failed (above)",
+            failed.join(", ")
+        ))
+    }
 }
 
 /// The browser's version line, for the report.
@@ -302,6 +332,32 @@ fn probe_points(scene: &Path, names: &[String]) -> Result<Vec<Option<DVec3>>> {
         .collect()
 }
 
+/// A point inside each link of a reduced mechanism, in its link frame (the frame of the CSV's
+/// position and rotation): the centre of its first collision shape, or its centre of mass
+/// when it has none (the page then draws the box with its inertia around it).
+fn link_points(mechanism: &Path, names: &[String]) -> Result<Vec<Option<DVec3>>> {
+    let text = std::fs::read_to_string(mechanism)
+        .map_err(|e| format!("cannot read {}: {e}", mechanism.display()))?;
+    let m = impulse_reduced::MechanismDesc::from_ron(&text)
+        .and_then(|d| d.build())
+        .map_err(|e| format!("{}: {e}", mechanism.display()))?;
+    names
+        .iter()
+        .map(|name| {
+            let link = m
+                .links
+                .iter()
+                .find(|l| l.name == *name)
+                .ok_or_else(|| format!("link `{name}` is not in {}", mechanism.display()))?;
+            Ok(Some(match link.shapes.first() {
+                Some(impulse_reduced::Shape::Sphere { center, .. }) => *center,
+                Some(impulse_reduced::Shape::Box { center, .. }) => *center,
+                None => link.inertia.com,
+            }))
+        })
+        .collect()
+}
+
 /// Whether a pixel is the selected body's magenta (any shade): red and blue alike and far
 /// above green.
 fn magenta(p: [u8; 4]) -> bool {
@@ -366,7 +422,10 @@ fn check_page(
         }
     }
     let (names, [first, last], frames) = first_and_last(csv)?;
-    let probes = probe_points(&page.scene, &names)?;
+    let probes = match page.reduce {
+        None => probe_points(&page.scene, &names)?,
+        Some(_) => link_points(&page.scene, &names)?,
+    };
     let page_frames = browser.eval("impulseViewer.frames")?;
     if page_frames.as_u64() != Some(frames as u64) {
         return Err(format!(
@@ -511,12 +570,15 @@ fn check_page(
         if bytes > MAX_PAGE_BYTES {
             return Err(format!("the page is {bytes} bytes, over {MAX_PAGE_BYTES}"));
         }
-        // Played and measured inside the page, which answers when the time is up.
+        // Played and measured inside the page, which answers when the time is up; the first
+        // WARM_UP_SECONDS are not measured (the page lowers its resolution then if it must).
         let stats = browser.eval(&format!(
             "new Promise(done => {{ impulseViewer.setTime(impulseViewer.start); \
-             impulseViewer.resetFrameStats(); impulseViewer.play(1); \
+             impulseViewer.play(1); \
+             setTimeout(() => impulseViewer.resetFrameStats(), {}); \
              setTimeout(() => {{ impulseViewer.pause(); done(impulseViewer.frameStats()); }}, {}); }})",
-            PLAY_SECONDS * 1000.0
+            WARM_UP_SECONDS * 1000.0,
+            (WARM_UP_SECONDS + PLAY_SECONDS) * 1000.0
         ))?;
         let mean = stats["intervalMean"].as_f64().unwrap_or(f64::NAN);
         let fps = 1000.0 / mean;

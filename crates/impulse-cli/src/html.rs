@@ -1,12 +1,18 @@
-//! `impulse run --html out.html`: the run as one self-contained web page that replays it with
-//! WebGL, for a user who wants to watch what happened before reading numbers.
+//! `impulse run --html out.html` (and `impulse reduce --html`): the run as one self-contained
+//! web page that replays it with WebGL, for a user who wants to watch what happened before
+//! reading numbers.
+//!
+//! The page is written from a [`Replay`], which knows nothing of how the run was made: bodies
+//! with triangles, frames of poses, impacts. [`Replay::of_run`] makes one of a rigid-body run
+//! (multibody links are bodies, named `<multibody>/<link>`); `impulse reduce` makes one of a
+//! FORK⁻¹S reduced mechanism (its links are bodies).
 //!
 //! The page needs no network: the renderer and its controls (`viewer/viewer.js`,
 //! `viewer/viewer.css`, `viewer/viewer.html`, plain JavaScript written for this page, no
 //! library) are compiled into the program with `include_str!` and written inline, and the run
 //! itself is one base64 block of little-endian binary data described by a small JSON header.
 //!
-//! ## What the page gets
+//! ## What the page gets (of a rigid-body run)
 //! - Every body, drawn from the triangles `--gltf` draws ([`crate::mesh`]), with its name and
 //!   kind (fixed bodies in a muted colour). Bodies with the same triangles share one mesh (a
 //!   row of dominos is one mesh).
@@ -33,13 +39,13 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use base64::Engine as _;
-use impulse_geom::{DMat3, DVec3};
+use impulse_geom::{DMat3, DQuat, DVec3};
 use impulse_sim::body::{Body, BodyKind};
 use impulse_sim::contact::ContactKind;
 use impulse_sim::{BodyState, ContactEvent, Recording, Scene, World};
 use serde_json::json;
 
-use crate::mesh::body_triangles;
+use crate::mesh::{Triangles, body_triangles};
 
 /// The page's markup (the body of the document, without the data and the script).
 const MARKUP: &str = include_str!("../viewer/viewer.html");
@@ -75,17 +81,108 @@ pub fn check_path(path: &Path) -> Result<(), String> {
     }
 }
 
-/// Writes the run as a page at `path`.
+/// Writes the run as a page at `path`, titled after the file.
 ///
 /// # Errors
-/// What [`to_html`] refuses, or the file that cannot be written, named.
+/// What [`Replay::of_run`] and [`Replay::to_html`] refuse, or the file that cannot be written.
 pub fn write(path: &Path, rec: &Recording, world: &World, scene: &Scene) -> Result<(), String> {
-    let title = path.file_stem().map_or_else(
+    let replay = Replay::of_run(rec, world, scene, &title_of(path))?;
+    write_replay(path, &replay)
+}
+
+/// The page's title: the file's name without its extension.
+pub fn title_of(path: &Path) -> String {
+    path.file_stem().map_or_else(
         || "impulse run".into(),
         |s| s.to_string_lossy().into_owned(),
-    );
-    let text = to_html(rec, world, scene, &title)?;
+    )
+}
+
+/// Writes `replay` as a page at `path`.
+///
+/// # Errors
+/// What [`Replay::to_html`] refuses, or the file that cannot be written, named.
+pub fn write_replay(path: &Path, replay: &Replay) -> Result<(), String> {
+    let text = replay.to_html()?;
     std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// How a body is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Does not move (muted grey).
+    Fixed,
+    /// Moved by the dynamics (orange).
+    Dynamic,
+    /// Moved by a script or a multibody (blue).
+    Driven,
+}
+
+impl Kind {
+    fn name(self) -> &'static str {
+        match self {
+            Kind::Fixed => "fixed",
+            Kind::Dynamic => "dynamic",
+            Kind::Driven => "driven",
+        }
+    }
+}
+
+/// A body of a replay: what the page draws and names.
+#[derive(Clone, Debug)]
+pub struct ReplayBody {
+    /// Its name.
+    pub name: String,
+    /// How it is drawn.
+    pub kind: Kind,
+    /// Its triangles in its own frame (the frame of its recorded position and rotation).
+    pub triangles: Vec<Triangles>,
+}
+
+/// One frame of a replay: the time and each body's state, in the order of the bodies.
+#[derive(Clone, Debug)]
+pub struct ReplayFrame {
+    /// Simulated time (s).
+    pub time: f64,
+    /// Each body's own-frame position and rotation (world).
+    pub poses: Vec<(DVec3, DQuat)>,
+    /// Each body's speed (m/s; `NaN`: unknown).
+    pub speeds: Vec<f64>,
+    /// Each body's energy (J; `NaN`: unknown).
+    pub energies: Vec<f64>,
+    /// The world's kinetic and potential energy (J; `NaN`: unknown, no plot).
+    pub energy: (f64, f64),
+}
+
+/// An impact shown on the time line and flashed where it happened.
+#[derive(Clone, Copy, Debug)]
+pub struct Impact {
+    /// Simulated time (s).
+    pub time: f64,
+    /// Contact point (world).
+    pub point: DVec3,
+    /// The two bodies (indices into the replay's bodies; [`NO_BODY`] for none).
+    pub bodies: [u32; 2],
+    /// Magnitude of the impulse (N·s).
+    pub impulse: f64,
+}
+
+/// What a page replays, whatever made it: a rigid-body run (multibody links are bodies), or a
+/// FORK⁻¹S reduced mechanism (its links are bodies).
+#[derive(Clone, Debug)]
+pub struct Replay {
+    /// The page's title.
+    pub title: String,
+    /// The world's up (against gravity; +Z without gravity).
+    pub up: DVec3,
+    /// What simulated it, shown under the title (e.g. `switching contact`).
+    pub model: String,
+    /// The bodies.
+    pub bodies: Vec<ReplayBody>,
+    /// The frames, in time order.
+    pub frames: Vec<ReplayFrame>,
+    /// The impacts, in time order.
+    pub impacts: Vec<Impact>,
 }
 
 /// The little-endian data block being written.
@@ -133,7 +230,7 @@ pub fn body_energy(body: &Body, s: &BodyState, gravity: DVec3) -> f64 {
         - m.mass * gravity.dot(s.com)
 }
 
-/// The impacts the page shows: collisions and fallback impulses, the [`MAX_EVENTS`] strongest,
+/// The impacts a page shows: collisions and fallback impulses, the [`MAX_EVENTS`] strongest,
 /// in time order.
 fn impacts(events: &[ContactEvent]) -> Vec<&ContactEvent> {
     let mut shown: Vec<&ContactEvent> = events
@@ -148,164 +245,220 @@ fn impacts(events: &[ContactEvent]) -> Vec<&ContactEvent> {
     shown
 }
 
-/// The kind of a body as the page names it.
-fn kind_name(kind: BodyKind) -> &'static str {
-    match kind {
-        BodyKind::Fixed => "fixed",
-        BodyKind::Dynamic => "dynamic",
-        BodyKind::Scripted | BodyKind::Link => "driven",
-    }
-}
-
-/// The run as a page: the bodies of `world` (shapes do not change) moved through `rec`'s
-/// frames, with `world`'s event log as impacts (empty unless [`World::set_event_log`] was on),
-/// titled `title`.
-///
-/// # Errors
-/// No frame, a recorded body no longer in `world`, frames that do not hold every body, or a
-/// non-finite position or time.
-pub fn to_html(
-    rec: &Recording,
-    world: &World,
-    scene: &Scene,
-    title: &str,
-) -> Result<String, String> {
-    if rec.frames.is_empty() {
-        return Err("--html: the run recorded no frame".into());
-    }
-    if let Some(f) = rec
-        .frames
-        .iter()
-        .find(|f| f.bodies.len() != rec.names.len())
-    {
-        return Err(format!(
-            "--html: the frame at t = {} holds {} bodies, not the {} recorded",
-            f.time,
-            f.bodies.len(),
-            rec.names.len()
-        ));
-    }
-    let mut bodies = Vec::with_capacity(rec.names.len());
-    for (name, &handle) in rec.names.iter().zip(&rec.handles) {
-        let body = world
-            .body(handle)
-            .ok_or_else(|| format!("--html: body `{name}` is no longer in the world"))?;
-        bodies.push(body);
-    }
-    let gravity = world.gravity();
-    let mut block = Block::default();
-
-    // The meshes, one per distinct set of triangles.
-    let mut meshes = Vec::new();
-    let mut mesh_of: HashMap<Vec<u8>, usize> = HashMap::new();
-    let mut body_meshes = Vec::with_capacity(bodies.len());
-    for (body, name) in bodies.iter().zip(&rec.names) {
-        let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
-        for t in body_triangles(body) {
-            let base = (positions.len() / 3) as u32;
-            positions.extend(t.positions.iter().flat_map(|p| p.to_array()));
-            normals.extend(t.normals.iter().flat_map(|p| p.to_array()));
-            indices.extend(t.indices.iter().map(|i| base + i));
-        }
-        let mut bytes = Block::default();
-        let what = || format!("body `{name}`'s mesh");
-        bytes.floats(positions.iter().copied(), true, &what)?;
-        bytes.floats(normals.iter().copied(), true, &what)?;
-        bytes.u32s(indices.iter().copied());
-        let next = meshes.len();
-        let k = *mesh_of.entry(bytes.0.clone()).or_insert(next);
-        if k == next {
-            meshes.push(json!({"vertices": positions.len() / 3, "indices": indices.len()}));
-            block.0.extend(bytes.0);
-        }
-        body_meshes.push(k);
-    }
-
-    // The frames.
-    let frames = &rec.frames;
-    block.floats(frames.iter().map(|f| f.time), true, &|| {
-        "a frame time".into()
-    })?;
-    for f in frames {
-        let what = || format!("the state at t = {}", f.time);
-        block.floats(
-            f.bodies.iter().flat_map(|s| {
-                let q = s.rotation.normalize();
-                [s.position.x, s.position.y, s.position.z, q.x, q.y, q.z, q.w]
-            }),
-            true,
-            &what,
-        )?;
-    }
-    for f in frames {
-        block.floats(f.bodies.iter().map(|s| s.velocity.length()), false, &|| {
-            String::new()
-        })?;
-    }
-    for f in frames {
-        block.floats(
-            f.bodies
-                .iter()
-                .zip(&bodies)
-                .map(|(s, b)| body_energy(b, s, gravity)),
-            false,
-            &String::new,
-        )?;
-    }
-    block.floats(
-        frames
-            .iter()
-            .flat_map(|f| [f.kinetic_energy, f.potential_energy]),
-        false,
-        &String::new,
-    )?;
-
-    // The impacts.
-    let index: HashMap<_, _> = rec
-        .handles
-        .iter()
-        .enumerate()
-        .map(|(i, &h)| (h, i as u32))
-        .collect();
-    let events = impacts(world.events());
-    let body_index = |h| index.get(&h).copied().unwrap_or(NO_BODY);
-    block.floats(
-        events
-            .iter()
-            .flat_map(|e| [e.time, e.point.x, e.point.y, e.point.z, e.impulse.length()]),
-        false,
-        &String::new,
-    )?;
-    block.u32s(
-        events
-            .iter()
-            .flat_map(|e| [body_index(e.a), body_index(e.b)]),
-    );
-
-    let up = if gravity.length() > 0.0 {
+/// The world's up: against gravity, +Z without gravity.
+pub fn up_of(gravity: DVec3) -> DVec3 {
+    if gravity.length() > 0.0 {
         -gravity.normalize()
     } else {
         DVec3::Z
-    };
-    let header = json!({
-        "format": FORMAT,
-        "title": title,
-        "generator": format!("impulse {}", env!("CARGO_PKG_VERSION")),
-        "up": up.to_array(),
-        "gravity": gravity.to_array(),
-        "contact_model": format!("{:?}", scene.desc.contact_model),
-        "bodies": bodies.iter().zip(&rec.names).zip(&body_meshes).map(|((b, name), &mesh)| json!({
-            "name": name,
-            "kind": kind_name(b.kind),
-            "mesh": mesh,
-            "radius": b.r_max,
-        })).collect::<Vec<_>>(),
-        "meshes": meshes,
-        "frames": frames.len(),
-        "events": events.len(),
-        "bytes": block.0.len(),
-    });
-    Ok(page(title, &header.to_string(), &block.0))
+    }
+}
+
+impl Replay {
+    /// A rigid-body run: the bodies of `world` (shapes do not change) moved through `rec`'s
+    /// frames, with `world`'s event log as impacts (empty unless [`World::set_event_log`] was
+    /// on).
+    ///
+    /// # Errors
+    /// No frame, a recorded body no longer in `world`, or frames that do not hold every body.
+    pub fn of_run(
+        rec: &Recording,
+        world: &World,
+        scene: &Scene,
+        title: &str,
+    ) -> Result<Self, String> {
+        if rec.frames.is_empty() {
+            return Err("--html: the run recorded no frame".into());
+        }
+        if let Some(f) = rec
+            .frames
+            .iter()
+            .find(|f| f.bodies.len() != rec.names.len())
+        {
+            return Err(format!(
+                "--html: the frame at t = {} holds {} bodies, not the {} recorded",
+                f.time,
+                f.bodies.len(),
+                rec.names.len()
+            ));
+        }
+        let mut bodies = Vec::with_capacity(rec.names.len());
+        for (name, &handle) in rec.names.iter().zip(&rec.handles) {
+            let body = world
+                .body(handle)
+                .ok_or_else(|| format!("--html: body `{name}` is no longer in the world"))?;
+            bodies.push(body);
+        }
+        let gravity = world.gravity();
+        let frames = rec
+            .frames
+            .iter()
+            .map(|f| ReplayFrame {
+                time: f.time,
+                poses: f.bodies.iter().map(|s| (s.position, s.rotation)).collect(),
+                speeds: f.bodies.iter().map(|s| s.velocity.length()).collect(),
+                energies: f
+                    .bodies
+                    .iter()
+                    .zip(&bodies)
+                    .map(|(s, b)| body_energy(b, s, gravity))
+                    .collect(),
+                energy: (f.kinetic_energy, f.potential_energy),
+            })
+            .collect();
+        let index: HashMap<_, _> = rec
+            .handles
+            .iter()
+            .enumerate()
+            .map(|(i, &h)| (h, i as u32))
+            .collect();
+        let body_index = |h| index.get(&h).copied().unwrap_or(NO_BODY);
+        let impacts = impacts(world.events())
+            .into_iter()
+            .map(|e| Impact {
+                time: e.time,
+                point: e.point,
+                bodies: [body_index(e.a), body_index(e.b)],
+                impulse: e.impulse.length(),
+            })
+            .collect();
+        Ok(Self {
+            title: title.to_owned(),
+            up: up_of(gravity),
+            model: match scene.desc.contact_model {
+                impulse_sim::ContactMode::Switching => "switching contact model".into(),
+                impulse_sim::ContactMode::Impulse => "impulse contact model".into(),
+            },
+            bodies: bodies
+                .iter()
+                .zip(&rec.names)
+                .map(|(b, name)| ReplayBody {
+                    name: name.clone(),
+                    kind: match b.kind {
+                        BodyKind::Fixed => Kind::Fixed,
+                        BodyKind::Dynamic => Kind::Dynamic,
+                        BodyKind::Scripted | BodyKind::Link => Kind::Driven,
+                    },
+                    triangles: body_triangles(b),
+                })
+                .collect(),
+            frames,
+            impacts,
+        })
+    }
+
+    /// The page.
+    ///
+    /// # Errors
+    /// No frame, a frame that does not hold every body, or a non-finite position, rotation,
+    /// time or vertex.
+    pub fn to_html(&self) -> Result<String, String> {
+        let (frames, b) = (&self.frames, self.bodies.len());
+        if frames.is_empty() {
+            return Err("--html: the run recorded no frame".into());
+        }
+        if let Some(f) = frames
+            .iter()
+            .find(|f| f.poses.len() != b || f.speeds.len() != b || f.energies.len() != b)
+        {
+            return Err(format!(
+                "--html: the frame at t = {} does not hold the {b} bodies",
+                f.time
+            ));
+        }
+        let mut block = Block::default();
+
+        // The meshes, one per distinct set of triangles.
+        let mut meshes = Vec::new();
+        let mut mesh_of: HashMap<Vec<u8>, usize> = HashMap::new();
+        let mut body_meshes = Vec::with_capacity(b);
+        let mut radii = Vec::with_capacity(b);
+        for body in &self.bodies {
+            let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+            for t in &body.triangles {
+                let base = (positions.len() / 3) as u32;
+                positions.extend(t.positions.iter().flat_map(|p| p.to_array()));
+                normals.extend(t.normals.iter().flat_map(|p| p.to_array()));
+                indices.extend(t.indices.iter().map(|i| base + i));
+            }
+            radii.push(
+                body.triangles
+                    .iter()
+                    .flat_map(|t| &t.positions)
+                    .map(|p| p.length())
+                    .fold(0.0, f64::max),
+            );
+            let mut bytes = Block::default();
+            let what = || format!("body `{}`'s mesh", body.name);
+            bytes.floats(positions.iter().copied(), true, &what)?;
+            bytes.floats(normals.iter().copied(), true, &what)?;
+            bytes.u32s(indices.iter().copied());
+            let next = meshes.len();
+            let k = *mesh_of.entry(bytes.0.clone()).or_insert(next);
+            if k == next {
+                meshes.push(json!({"vertices": positions.len() / 3, "indices": indices.len()}));
+                block.0.extend(bytes.0);
+            }
+            body_meshes.push(k);
+        }
+
+        // The frames.
+        block.floats(frames.iter().map(|f| f.time), true, &|| {
+            "a frame time".into()
+        })?;
+        for f in frames {
+            let what = || format!("the state at t = {}", f.time);
+            block.floats(
+                f.poses.iter().flat_map(|(p, q)| {
+                    let q = q.normalize();
+                    [p.x, p.y, p.z, q.x, q.y, q.z, q.w]
+                }),
+                true,
+                &what,
+            )?;
+        }
+        for f in frames {
+            block.floats(f.speeds.iter().copied(), false, &String::new)?;
+        }
+        for f in frames {
+            block.floats(f.energies.iter().copied(), false, &String::new)?;
+        }
+        block.floats(
+            frames.iter().flat_map(|f| [f.energy.0, f.energy.1]),
+            false,
+            &String::new,
+        )?;
+
+        // The impacts.
+        let events = &self.impacts;
+        block.floats(
+            events
+                .iter()
+                .flat_map(|e| [e.time, e.point.x, e.point.y, e.point.z, e.impulse]),
+            false,
+            &String::new,
+        )?;
+        block.u32s(events.iter().flat_map(|e| e.bodies));
+
+        let header = json!({
+            "format": FORMAT,
+            "title": self.title,
+            "model": self.model,
+            "generator": format!("impulse {}", env!("CARGO_PKG_VERSION")),
+            "up": self.up.to_array(),
+            "bodies": self.bodies.iter().zip(&body_meshes).zip(&radii).map(|((body, &mesh), &radius)| json!({
+                "name": body.name,
+                "kind": body.kind.name(),
+                "mesh": mesh,
+                "radius": radius,
+            })).collect::<Vec<_>>(),
+            "meshes": meshes,
+            "frames": frames.len(),
+            "events": events.len(),
+            "bytes": block.0.len(),
+        });
+        Ok(page(&self.title, &header.to_string(), &block.0))
+    }
 }
 
 /// Text safe inside an HTML element (`&`, `<`, `>` escaped).
@@ -334,7 +487,6 @@ fn page(title: &str, header: &str, data: &[u8]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use impulse_geom::DQuat;
     use std::path::PathBuf;
 
     fn scene(file: &str) -> Scene {
@@ -379,7 +531,10 @@ mod tests {
     fn the_data_block_holds_the_recording() {
         let scene = scene("pool-break.ron");
         let (world, rec) = run(&scene, 0.2);
-        let page = to_html(&rec, &world, &scene, "pool").unwrap();
+        let page = Replay::of_run(&rec, &world, &scene, "pool")
+            .unwrap()
+            .to_html()
+            .unwrap();
         let (h, data) = read_back(&page);
         assert_eq!(h["format"], FORMAT);
         assert_eq!(h["bytes"].as_u64().unwrap() as usize, data.len());
@@ -477,7 +632,10 @@ mod tests {
             base_dir: PathBuf::new(),
         };
         let (world, rec) = run(&scene, 0.02);
-        let page = to_html(&rec, &world, &scene, "<title>").unwrap();
+        let page = Replay::of_run(&rec, &world, &scene, "<title>")
+            .unwrap()
+            .to_html()
+            .unwrap();
         let (h, _) = read_back(&page);
         assert_eq!(h["bodies"][0]["name"], name);
         assert_eq!(h["title"], "<title>");

@@ -33,18 +33,45 @@ pub(crate) fn body_triangles(body: &Body) -> Vec<Triangles> {
     body.shape
         .pieces()
         .iter()
-        .map(|piece| {
-            let place = to_own * piece.pose;
-            let mut t = piece_triangles(&piece.convex);
-            for p in &mut t.positions {
-                *p = place.transform_point(*p);
-            }
-            for n in &mut t.normals {
-                *n = place.transform_vector(*n);
-            }
-            t
-        })
+        .map(|piece| piece_triangles(&piece.convex).moved(&(to_own * piece.pose)))
         .collect()
+}
+
+impl Triangles {
+    /// The same triangles moved rigidly by `place`.
+    pub(crate) fn moved(mut self, place: &Pose) -> Self {
+        for p in &mut self.positions {
+            *p = place.transform_point(*p);
+        }
+        for n in &mut self.normals {
+            *n = place.transform_vector(*n);
+        }
+        self
+    }
+}
+
+/// A box of half extents `half` centred on the origin, along the axes: six faces of two
+/// triangles, each face with its own outward normal.
+pub(crate) fn box_triangles(half: DVec3) -> Triangles {
+    let mut t = Triangles::default();
+    for axis in 0..3 {
+        for sign in [-1.0, 1.0] {
+            let mut n = DVec3::ZERO;
+            n[axis] = sign;
+            // Two axes across the face, ordered so that u × v = n (counter-clockwise outside).
+            let (mut u, mut v) = (DVec3::ZERO, DVec3::ZERO);
+            u[(axis + 1) % 3] = 1.0;
+            v[(axis + 2) % 3] = sign;
+            let base = t.positions.len() as u32;
+            for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                t.positions.push(half * (n + a * u + b * v));
+                t.normals.push(n);
+            }
+            t.indices
+                .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+        }
+    }
+    t
 }
 
 /// The triangles of a convex piece in its own frame.
@@ -77,7 +104,7 @@ fn polyhedron_triangles(p: &ConvexPolyhedron) -> Triangles {
 
 /// A UV sphere of [`SPHERE_STACKS`] × [`SPHERE_SLICES`] scaled by `semi_axes`: its vertices lie
 /// on the ellipsoid, with the ellipsoid's normals. The poles' degenerate triangles are left out.
-fn uv_ellipsoid(semi_axes: DVec3) -> Triangles {
+pub(crate) fn uv_ellipsoid(semi_axes: DVec3) -> Triangles {
     let (stacks, slices) = (SPHERE_STACKS, SPHERE_SLICES);
     let mut t = Triangles::default();
     for i in 0..=stacks {
@@ -124,6 +151,27 @@ mod tests {
             let n = (b - a).cross(c - a);
             assert!(n.length() > 0.0, "degenerate triangle {tri:?}");
             assert!(n.dot(a + b + c) > 0.0, "inward triangle {tri:?}");
+        }
+    }
+
+    /// A box's triangles face outward, cover its six faces (area 8(ab + bc + ca)) and lie on
+    /// its surface.
+    #[test]
+    fn box_faces_outward() {
+        let half = DVec3::new(1.0, 2.0, 3.0);
+        let t = box_triangles(half);
+        assert_eq!(t.indices.len(), 36);
+        let mut area = 0.0;
+        for tri in t.indices.chunks_exact(3) {
+            let [a, b, c] = [0, 1, 2].map(|k| t.positions[tri[k] as usize]);
+            let n = (b - a).cross(c - a);
+            assert!(n.dot(a + b + c) > 0.0, "inward triangle {tri:?}");
+            assert!((n.normalize() - t.normals[tri[0] as usize]).length() < 1e-12);
+            area += 0.5 * n.length();
+        }
+        assert!((area - 8.0 * (2.0 + 6.0 + 3.0)).abs() < 1e-12, "{area}");
+        for p in &t.positions {
+            assert_eq!((p.abs() - half).max_element(), 0.0, "{p} off the surface");
         }
     }
 }

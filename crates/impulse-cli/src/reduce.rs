@@ -6,13 +6,16 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use impulse_geom::{DVec3, Pose, Twist};
+use impulse_geom::{DQuat, DVec3, Pose, Twist};
+use impulse_massprops::MassProperties;
 use impulse_reduced::reference::kinematics::link_poses;
 use impulse_reduced::reference::{Configuration, Load, StaticOptions, solve_statics};
 use impulse_reduced::{
     ConstructOptions, Mechanism, MechanismDesc, Obstacle, ReducedModel, ReducedSim,
 };
 
+use crate::html::{Kind, Replay, ReplayBody, ReplayFrame};
+use crate::mesh::{self, Triangles};
 use crate::plot::{self, Axis};
 use crate::progress::Progress;
 
@@ -48,6 +51,11 @@ pub struct ReduceArgs {
     /// Write an SVG plot (error.svg: the per-step error estimate) into this directory.
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// Write the run as a self-contained replay page (the page of `impulse run --html`): the
+    /// links drawn from their collision shapes, or as the box with their inertia when they
+    /// have none.
+    #[arg(long, value_name = "OUT.html")]
+    html: Option<PathBuf>,
 }
 
 fn parse_loads(m: &Mechanism, specs: &[String]) -> Result<Vec<Load>, String> {
@@ -95,6 +103,12 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
         .build()
         .map_err(|e| format!("{}: {e}", args.mechanism.display()))?;
     let loads = parse_loads(&m, &args.load)?;
+    if let Some(path) = &args.html {
+        if args.statics {
+            return Err("--html replays a simulation: leave out --static".into());
+        }
+        crate::html::check_path(path)?;
+    }
     let t0 = Instant::now();
     let model = ReducedModel::build(
         &m,
@@ -190,6 +204,8 @@ fn simulate(
     let mut internal = vec![Pose::IDENTITY; sim.model.internal.len()];
     let mut prev: Option<Vec<Pose>> = None;
     let mut frames: Vec<(f64, Vec<(Pose, Twist)>)> = Vec::new();
+    // The base's pose at each frame (a free base moves; a fixed one stays at rest).
+    let mut base_poses: Vec<Pose> = Vec::new();
     let mut errors: Vec<(f64, f64)> = Vec::new();
     let progress = Progress::time("impulse reduce", args.until);
     let wall = Instant::now();
@@ -217,6 +233,7 @@ fn simulate(
                 };
                 errors.push((t, sim.constraint_error(m)));
                 frames.push((t, poses.iter().copied().zip(vel).collect()));
+                base_poses.push(sim.base.as_ref().map_or(m.links[m.base].rest, |b| b.pose));
                 progress.set_time(t);
             }
             prev = Some(poses);
@@ -226,6 +243,25 @@ fn simulate(
     let wall = wall.elapsed().as_secs_f64();
     if let Some(path) = &args.out {
         write_trajectory(path, &names, &frames)?;
+    }
+    if let Some(path) = &args.html {
+        let links: Vec<usize> = sim
+            .model
+            .end_effectors
+            .iter()
+            .chain(&sim.model.internal)
+            .copied()
+            .collect();
+        let base = (sim.base.is_some(), base_poses.as_slice());
+        let replay = replay(
+            m,
+            &links,
+            &frames,
+            base,
+            args.ground,
+            &crate::html::title_of(path),
+        )?;
+        crate::html::write_replay(path, &replay)?;
     }
     if let Some(dir) = &args.plot {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -241,6 +277,131 @@ fn simulate(
         m.links.len(),
         wall * 1e6 / steps as f64
     ))
+}
+
+/// Half extents of the ground slab drawn under a mechanism, beyond the links' reach, as a
+/// multiple of that reach.
+const GROUND_MARGIN: f64 = 1.5;
+/// Half thickness of the drawn ground slab, as a share of its half width.
+const GROUND_THICKNESS: f64 = 0.02;
+/// Thinnest side of a link's inertia box, as a share of its longest (a rod's inertia box
+/// would otherwise be a line).
+const INERTIA_BOX_MIN: f64 = 0.05;
+
+/// The triangles of a link in its frame: its collision shapes, or, without any, the box of
+/// uniform density with the link's mass, centre of mass and principal moments (half extents
+/// `a_k = √(3/(2m)·(I_j + I_l − I_k))`, along the principal axes); none for a massless link.
+fn link_triangles(link: &impulse_reduced::Link) -> Vec<Triangles> {
+    use impulse_reduced::Shape;
+    if !link.shapes.is_empty() {
+        return link
+            .shapes
+            .iter()
+            .map(|s| match *s {
+                Shape::Sphere { center, radius } => {
+                    mesh::uv_ellipsoid(DVec3::splat(radius)).moved(&Pose::from_translation(center))
+                }
+                Shape::Box {
+                    center,
+                    half_extents,
+                } => mesh::box_triangles(half_extents).moved(&Pose::from_translation(center)),
+            })
+            .collect();
+    }
+    let i = &link.inertia;
+    let Ok(principal) = MassProperties {
+        mass: i.mass,
+        com: i.com,
+        inertia: i.inertia_com,
+    }
+    .principal() else {
+        return Vec::new();
+    };
+    if i.mass.is_nan() || i.mass <= 0.0 {
+        return Vec::new();
+    }
+    let m = principal.moments;
+    let half = DVec3::new(m.y + m.z - m.x, m.z + m.x - m.y, m.x + m.y - m.z).max(DVec3::ZERO)
+        * (1.5 / i.mass);
+    let half = DVec3::new(half.x.sqrt(), half.y.sqrt(), half.z.sqrt());
+    let half = half.max(DVec3::splat(INERTIA_BOX_MIN * half.max_element()));
+    let axes = impulse_geom::DQuat::from_mat3(&principal.axes);
+    vec![mesh::box_triangles(half).moved(&Pose::new(axes, i.com))]
+}
+
+/// The reduced run as a replay: the `links` (end effectors, then internal links, the order
+/// of `frames` and of `--out`) with their recorded poses and speeds, then the base (`base`:
+/// whether it is free, and its pose at each frame), then a ground slab under the links when
+/// there is a ground plane at `ground`. Energies are not recorded.
+fn replay(
+    m: &Mechanism,
+    links: &[usize],
+    frames: &[(f64, Vec<(Pose, Twist)>)],
+    base: (bool, &[Pose]),
+    ground: Option<f64>,
+    title: &str,
+) -> Result<Replay, String> {
+    let mut bodies: Vec<ReplayBody> = links
+        .iter()
+        .map(|&l| ReplayBody {
+            name: m.links[l].name.clone(),
+            kind: Kind::Dynamic,
+            triangles: link_triangles(&m.links[l]),
+        })
+        .collect();
+    let mut frames: Vec<ReplayFrame> = frames
+        .iter()
+        .map(|(t, states)| ReplayFrame {
+            time: *t,
+            poses: states
+                .iter()
+                .map(|(p, _)| (p.translation, p.rotation))
+                .collect(),
+            speeds: states.iter().map(|(_, v)| v.v.length()).collect(),
+            energies: vec![f64::NAN; states.len()],
+            energy: (f64::NAN, f64::NAN),
+        })
+        .collect();
+    let (free, base_poses) = base;
+    bodies.push(ReplayBody {
+        name: m.links[m.base].name.clone(),
+        kind: if free { Kind::Dynamic } else { Kind::Fixed },
+        triangles: link_triangles(&m.links[m.base]),
+    });
+    for (f, p) in frames.iter_mut().zip(base_poses) {
+        f.poses.push((p.translation, p.rotation));
+        f.speeds.push(f64::NAN);
+        f.energies.push(f64::NAN);
+    }
+    if let Some(z) = ground {
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for (p, _) in frames.iter().flat_map(|f| &f.poses) {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        let centre = 0.5 * (lo + hi);
+        let reach = GROUND_MARGIN * (0.5 * (hi - lo).max_element()).max(f64::EPSILON);
+        let half = DVec3::new(reach, reach, GROUND_THICKNESS * reach);
+        bodies.push(ReplayBody {
+            name: "ground".into(),
+            kind: Kind::Fixed,
+            triangles: vec![mesh::box_triangles(half)],
+        });
+        for f in &mut frames {
+            f.poses
+                .push((DVec3::new(centre.x, centre.y, z - half.z), DQuat::IDENTITY));
+            f.speeds.push(0.0);
+            f.energies.push(f64::NAN);
+        }
+    }
+    Ok(Replay {
+        title: title.to_owned(),
+        up: crate::html::up_of(m.gravity),
+        model: "FORK⁻¹S reduced model".into(),
+        bodies,
+        frames,
+        impacts: Vec::new(),
+    })
 }
 
 /// Rotation vector (world) taking `a`'s orientation to `b`'s.
@@ -305,4 +466,81 @@ fn plot_error(errors: &[(f64, f64)]) -> Result<String, String> {
         },
         &[("constraint error".into(), errors.to_vec())],
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use impulse_geom::{DMat3, SpatialInertia};
+
+    /// A link without shapes is drawn as the uniform box of its mass and inertia: the box the
+    /// triangles span (its edges read from the vertices) has the link's inertia tensor,
+    /// `Σ_k m/3·(h_j² + h_l²)·a_k a_kᵀ` over its axes `a_k` and half extents `h_k`, centred on
+    /// the link's centre of mass — for a tensor whose principal axes are not the link's.
+    #[test]
+    fn a_link_without_shapes_is_its_inertia_box() {
+        let turn = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.7);
+        let r = DMat3::from_quat(turn);
+        let (mass, half) = (0.3, DVec3::new(0.01, 0.04, 0.1));
+        let moments = mass / 3.0
+            * DVec3::new(
+                half.y * half.y + half.z * half.z,
+                half.z * half.z + half.x * half.x,
+                half.x * half.x + half.y * half.y,
+            );
+        let inertia = r * DMat3::from_diagonal(moments) * r.transpose();
+        let com = DVec3::new(0.02, -0.01, 0.05);
+        let link = impulse_reduced::Link {
+            name: "rod".into(),
+            rest: Pose::IDENTITY,
+            inertia: SpatialInertia {
+                mass,
+                com,
+                inertia_com: inertia,
+            },
+            shapes: Vec::new(),
+        };
+        let t = link_triangles(&link);
+        assert_eq!(t.len(), 1);
+        let corners: Vec<DVec3> = t[0].positions.clone();
+        let centre = corners.iter().copied().sum::<DVec3>() / corners.len() as f64;
+        assert!(
+            (centre - com).length() < 1e-12,
+            "centre {centre}, com {com}"
+        );
+        // The three edges at one corner: its nearest other corners in three directions.
+        let c0 = corners[0];
+        let mut edges: Vec<DVec3> = Vec::new();
+        let mut others: Vec<DVec3> = corners.iter().map(|&c| c - c0).collect();
+        others.sort_by(|a, b| a.length().total_cmp(&b.length()));
+        for e in others {
+            if e.length() > 1e-12
+                && edges
+                    .iter()
+                    .all(|f| e.normalize().dot(f.normalize()).abs() < 1e-9)
+            {
+                edges.push(e);
+            }
+        }
+        assert_eq!(edges.len(), 3);
+        let mut drawn = DMat3::ZERO;
+        for k in 0..3 {
+            let (j, l) = ((k + 1) % 3, (k + 2) % 3);
+            let h = |i: usize| edges[i].length() / 2.0;
+            let a = edges[k].normalize();
+            let moment = mass / 3.0 * (h(j) * h(j) + h(l) * h(l));
+            drawn += DMat3::from_cols(a * a.x, a * a.y, a * a.z) * moment;
+        }
+        let diff = (drawn - inertia).to_cols_array();
+        let scale = moments.max_element();
+        assert!(
+            diff.iter().all(|d| d.abs() < 1e-9 * scale),
+            "drawn {drawn:?}, link {inertia:?}"
+        );
+        let massless = impulse_reduced::Link {
+            inertia: SpatialInertia::ZERO,
+            ..link
+        };
+        assert!(link_triangles(&massless).is_empty());
+    }
 }

@@ -82,3 +82,62 @@ fn bad_input_names_the_problem() {
         out.stderr
     );
 }
+
+/// `--html` replays the reduced simulation: the page lists the links in the order of `--out`,
+/// then the base (free: it moves) and the ground slab (fixed), and holds the frames of
+/// `--out`; `--static` has nothing to replay and is refused.
+#[test]
+fn a_simulation_replays_as_a_page() {
+    let dir = common::Scratch::new("reduce-html");
+    let (html, csv) = (dir.join("legged.html"), dir.join("legged.csv"));
+    let legged = mechanism("legged-6.ron");
+    let out = impulse(&[
+        "reduce",
+        &legged,
+        "--until",
+        "0.1",
+        "--ground",
+        "-0.3",
+        "--html",
+        html.to_str().unwrap(),
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(out.ok, "{}", out.stderr);
+    let page = std::fs::read_to_string(&html).unwrap();
+    let open = "id=\"impulse-header\">";
+    let start = page.find(open).unwrap() + open.len();
+    let end = start + page[start..].find("</script>").unwrap();
+    let header: serde_json::Value = serde_json::from_str(&page[start..end]).unwrap();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut names: Vec<&str> = Vec::new();
+    for line in text.lines().skip(1) {
+        let name = line.split(',').nth(1).unwrap();
+        if names.contains(&name) {
+            break;
+        }
+        names.push(name);
+    }
+    let frames = text.lines().skip(1).count() / names.len();
+    let bodies = header["bodies"].as_array().unwrap();
+    let listed: Vec<&str> = bodies.iter().map(|b| b["name"].as_str().unwrap()).collect();
+    assert_eq!(listed[..names.len()], names[..]);
+    assert_eq!(listed[names.len()..], ["body", "ground"]);
+    assert_eq!(bodies[names.len()]["kind"], "dynamic", "a free base moves");
+    assert_eq!(bodies[names.len() + 1]["kind"], "fixed");
+    assert_eq!(header["frames"].as_u64(), Some(frames as u64));
+    assert_eq!(header["model"], "FORK⁻¹S reduced model");
+
+    let refused = impulse(&[
+        "reduce",
+        &legged,
+        "--static",
+        "--html",
+        html.to_str().unwrap(),
+    ]);
+    assert!(
+        !refused.ok && refused.stderr.contains("leave out --static"),
+        "{}",
+        refused.stderr
+    );
+}

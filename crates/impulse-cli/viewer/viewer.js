@@ -50,8 +50,8 @@
    * every ADAPT_FRAMES frames, if their mean interval is longer, the resolution drops by
    * ADAPT_STEP, down to MIN_RENDER_SCALE. A paused view is always drawn at full resolution. */
   const TARGET_FPS = 45;
-  const ADAPT_FRAMES = 20;
-  const ADAPT_STEP = 0.75;
+  const ADAPT_FRAMES = 10;
+  const ADAPT_STEP = 0.7;
   const MIN_RENDER_SCALE = 0.35;
 
   const api = (window.impulseViewer = { ready: false, errors: [] });
@@ -476,6 +476,8 @@
   scrub.min = start;
   scrub.max = end;
   $("title").textContent = header.title;
+  $("title").title = `${header.model} · ${header.generator}`;
+  $("model").textContent = header.model;
   $("count").textContent = `(${B})`;
   const fmt = (x, unit) => (Number.isFinite(x) ? `${Number(x.toPrecision(4))} ${unit}` : "—");
   const list = $("bodies");
@@ -599,12 +601,25 @@
       let hi = -Infinity;
       for (let k = 0; k < F; k++)
         for (const [, , y] of series) {
-          lo = Math.min(lo, y(k));
-          hi = Math.max(hi, y(k));
+          const v = y(k);
+          if (Number.isFinite(v)) {
+            lo = Math.min(lo, v);
+            hi = Math.max(hi, v);
+          }
         }
-      if (!(hi > lo)) [lo, hi] = [lo - 1, lo + 1];
-      const pad = 0.05 * (hi - lo);
-      energyRange = [lo - pad, hi + pad];
+      if (!Number.isFinite(lo)) energyRange = "none";
+      else {
+        if (!(hi > lo)) [lo, hi] = [lo - 1, lo + 1];
+        const pad = 0.05 * (hi - lo);
+        energyRange = [lo - pad, hi + pad];
+      }
+    }
+    if (energyRange === "none") {
+      energyCursor.hidden = true;
+      g.fillStyle = "#666";
+      g.font = "12px system-ui, sans-serif";
+      g.fillText("This run recorded no energies.", 10, 30);
+      return;
     }
     const [lo, hi] = energyRange;
     const x = (t) => PLOT.left + ((t - start) / Math.max(end - start, 1e-12)) * (w - PLOT.left - PLOT.right);
@@ -640,11 +655,16 @@
       g.strokeStyle = colour;
       g.lineWidth = 1.5;
       g.beginPath();
+      let pen = false;
       for (let k = 0; k < F; k++) {
-        const px = x(times[k]);
-        const py = y(value(k));
-        if (k === 0) g.moveTo(px, py);
-        else g.lineTo(px, py);
+        const v = value(k);
+        if (!Number.isFinite(v)) {
+          pen = false;
+          continue;
+        }
+        if (pen) g.lineTo(x(times[k]), y(v));
+        else g.moveTo(x(times[k]), y(v));
+        pen = true;
       }
       g.stroke();
       g.fillStyle = colour;
