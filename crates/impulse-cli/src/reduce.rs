@@ -151,8 +151,8 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
         let full = link_poses(&m, &sol.config);
         let r = m.bounding_radius();
         let mut s = format!(
-            "{{\n  \"mechanism\": {:?},\n  \"build_ms\": {build_ms:.3},\n  \"end_effectors\": [\n",
-            m.name
+            "{{\n  \"mechanism\": {},\n  \"build_ms\": {build_ms:.3},\n  \"end_effectors\": [\n",
+            json_string(&m.name)
         );
         for (i, &e) in model.end_effectors.iter().enumerate() {
             let red = model.reference[i] * Pose::exp(&ee[i]);
@@ -161,8 +161,8 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
                 ((d.v / r).length_squared() + (d.w / std::f64::consts::PI).length_squared()).sqrt();
             let _ = writeln!(
                 s,
-                "    {{\"link\": {:?}, \"reduced\": {:?}, \"full\": {:?}, \"relative_error\": {err:.3e}}}{}",
-                m.links[e].name,
+                "    {{\"link\": {}, \"reduced\": {:?}, \"full\": {:?}, \"relative_error\": {err:.3e}}}{}",
+                json_string(&m.links[e].name),
                 red.translation.to_array(),
                 full[e].translation.to_array(),
                 if i + 1 < ne { "," } else { "" }
@@ -272,8 +272,8 @@ fn simulate(
     let max_err = errors.iter().map(|e| e.1).fold(0.0, f64::max);
     let ee = sim.end_effector_pose(0).translation.to_array();
     Ok(format!(
-        "{{\n  \"mechanism\": {:?},\n  \"links\": {},\n  \"build_ms\": {build_ms:.3},\n  \"steps\": {steps},\n  \"wall_s\": {wall:.4},\n  \"us_per_step\": {:.3},\n  \"end_effector_0\": {ee:?},\n  \"max_constraint_error\": {max_err:.3e}\n}}",
-        m.name,
+        "{{\n  \"mechanism\": {},\n  \"links\": {},\n  \"build_ms\": {build_ms:.3},\n  \"steps\": {steps},\n  \"wall_s\": {wall:.4},\n  \"us_per_step\": {:.3},\n  \"end_effector_0\": {ee:?},\n  \"max_constraint_error\": {max_err:.3e}\n}}",
+        json_string(&m.name),
         m.links.len(),
         wall * 1e6 / steps as f64
     ))
@@ -404,6 +404,12 @@ fn replay(
     })
 }
 
+/// `s` as a JSON string (quotes and control characters escaped as JSON wants, which Rust's
+/// `{:?}` does not do).
+fn json_string(s: &str) -> String {
+    serde_json::Value::from(s).to_string()
+}
+
 /// Rotation vector (world) taking `a`'s orientation to `b`'s.
 fn rotvec(a: &Pose, b: &Pose) -> DVec3 {
     impulse_geom::se3::so3_log(b.rotation * a.rotation.conjugate())
@@ -423,20 +429,17 @@ fn write_trajectory(
         ]
     };
     if json {
-        let _ = write!(s, "{{\"bodies\": {names:?},\n\"frames\": [\n");
-        for (k, (t, states)) in frames.iter().enumerate() {
-            let rows: Vec<String> = states
-                .iter()
-                .map(|(p, v)| format!("{:?}", nums(p, v)))
-                .collect();
-            let _ = write!(
-                s,
-                "{}{{\"t\": {t}, \"states\": [{}]}}",
-                if k > 0 { ",\n" } else { "" },
-                rows.join(", ")
-            );
-        }
-        s.push_str("\n]}\n");
+        // Through serde_json: link names may hold quotes or control characters.
+        let frames: Vec<serde_json::Value> = frames
+            .iter()
+            .map(|(t, states)| {
+                let rows: Vec<[f64; 13]> = states.iter().map(|(p, v)| nums(p, v)).collect();
+                serde_json::json!({"t": t, "states": rows})
+            })
+            .collect();
+        s = serde_json::to_string(&serde_json::json!({"bodies": names, "frames": frames}))
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        s.push('\n');
     } else {
         s.push_str("time,body,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz\n");
         for (t, states) in frames {

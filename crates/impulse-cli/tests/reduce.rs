@@ -141,3 +141,59 @@ fn a_simulation_replays_as_a_page() {
         refused.stderr
     );
 }
+
+/// Names with quotes and control characters are written as JSON strings: the printed summary,
+/// the `--static` report and a `--out` JSON trajectory all parse and keep the names.
+#[test]
+fn hostile_names_stay_valid_json() {
+    let dir = common::Scratch::new("reduce-names");
+    let text = std::fs::read_to_string(mechanism("y.ron")).unwrap();
+    let hostile = "a\"3\u{1}";
+    let edited = text
+        .replace("\"a3\"", &format!("\"a\\\"3{}\"", '\u{1}'))
+        .replace("name: \"y-4\"", "name: \"y \\\"4\\\"\"");
+    let path = dir.join("hostile.ron");
+    std::fs::write(&path, edited).unwrap();
+    let json = dir.join("y.json");
+    let load = format!("{hostile}:1,0,0");
+    let out = impulse(&[
+        "reduce",
+        path.to_str().unwrap(),
+        "--load",
+        &load,
+        "--until",
+        "0.01",
+        "--out",
+        json.to_str().unwrap(),
+    ]);
+    assert!(out.ok, "{}", out.stderr);
+    assert_eq!(
+        out.json.expect("the summary is JSON")["mechanism"],
+        "y \"4\""
+    );
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(
+        written["bodies"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|b| b == hostile)
+    );
+    let out = impulse(&[
+        "reduce",
+        path.to_str().unwrap(),
+        "--load",
+        &load,
+        "--static",
+    ]);
+    assert!(out.ok, "{}", out.stderr);
+    let report = out.json.expect("the static report is JSON");
+    assert!(
+        report["end_effectors"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|e| e["link"] == hostile)
+    );
+}
