@@ -315,6 +315,34 @@ impl Browser {
         Ok(())
     }
 
+    /// A left-button drag from `from` to `to` (CSS pixels) in `steps` moves.
+    ///
+    /// # Errors
+    /// The browser refuses the events.
+    pub fn drag(&mut self, from: (f64, f64), to: (f64, f64), steps: u32) -> Result<()> {
+        let mouse = |kind: &str, (x, y): (f64, f64), buttons: u32| json!({"type": kind, "x": x, "y": y, "button": "left", "buttons": buttons, "clickCount": 1});
+        self.call("Input.dispatchMouseEvent", mouse("mousePressed", from, 1))?;
+        for k in 1..=steps {
+            let f = f64::from(k) / f64::from(steps);
+            let at = (from.0 + f * (to.0 - from.0), from.1 + f * (to.1 - from.1));
+            self.call("Input.dispatchMouseEvent", mouse("mouseMoved", at, 1))?;
+        }
+        self.call("Input.dispatchMouseEvent", mouse("mouseReleased", to, 0))?;
+        Ok(())
+    }
+
+    /// A wheel turn of `delta_y` (pixels; positive: toward the user) at (`x`, `y`).
+    ///
+    /// # Errors
+    /// The browser refuses the event.
+    pub fn wheel(&mut self, x: f64, y: f64, delta_y: f64) -> Result<()> {
+        self.call(
+            "Input.dispatchMouseEvent",
+            json!({"type": "mouseWheel", "x": x, "y": y, "deltaX": 0, "deltaY": delta_y}),
+        )?;
+        Ok(())
+    }
+
     /// A screenshot of the page, as PNG bytes and decoded.
     ///
     /// # Errors

@@ -146,6 +146,7 @@ mod tests {
                 "layering",
                 "package",
                 "validate",
+                "viewer",
             ]
         );
     }

@@ -64,6 +64,12 @@ pub const MIN_HIT_SHARE: f64 = 1.0;
 pub const PROBE_DEPTH: f64 = 0.6;
 /// Most moving bodies checked per page and time.
 pub const MAX_CHECKED: usize = 12;
+/// The drag (CSS pixels, to the right) of the orbit check.
+pub const ORBIT_DRAG_PX: f64 = 60.0;
+/// The wheel turn (pixels, away from the user: zoom in) of the zoom check.
+pub const ZOOM_WHEEL: f64 = 200.0;
+/// How much a body's distance from the target on screen must grow under that wheel turn.
+pub const ZOOM_MIN_GAIN: f64 = 1.1;
 /// Most bodies clicked in the picking check (a clicked body may be hidden behind another).
 pub const MAX_PICKS: usize = 5;
 /// How far the time after a click on the slider may be from the clicked place, as a share of
@@ -449,14 +455,12 @@ fn check_page(
     let (mut checks, mut hits) = (0, 0);
     let mut seen = Vec::new();
     let mut missed = Vec::new();
-    let mut overview = Vec::new();
     for (label, (time, states)) in [("start", &first), ("end", &last)] {
         browser.eval(&format!(
             "impulseViewer.select(-1); impulseViewer.setTime({time})"
         ))?;
-        let (png, image) = browser.screenshot()?;
+        let (png, _) = browser.screenshot()?;
         write_png(&out.join(format!("{}-{label}.png", page.name)), &png)?;
-        overview.push(image);
         let view = browser.eval("impulseViewer.view()")?;
         for &i in &moving {
             browser.eval(&format!(
@@ -524,11 +528,59 @@ fn check_page(
             picks.join(", ")
         ));
     }
-    // Scrubbing: a click on the slider moves the time and changes the picture.
+    // The camera: a drag turns the view about its target (the target's projection stays, the
+    // eye moves), and the wheel zooms in (a body's projected offset from the target grows).
+    browser.eval("impulseViewer.select(-1)")?;
+    let before = browser.eval("impulseViewer.view()")?;
+    let centre = (
+        before["left"].as_f64().unwrap_or(0.0) + before["width"].as_f64().unwrap_or(0.0) / 2.0,
+        before["top"].as_f64().unwrap_or(0.0) + before["height"].as_f64().unwrap_or(0.0) / 2.0,
+    );
+    browser.drag(centre, (centre.0 + ORBIT_DRAG_PX, centre.1), 5)?;
+    browser.eval("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")?;
+    let turned = browser.eval("impulseViewer.view()")?;
+    let body = last.1[moving[0]].0;
+    let moved = |a: &Value, b: &Value| -> Option<f64> {
+        let (p, q) = (project(a, body)?, project(b, body)?);
+        Some((p.0 - q.0).hypot(p.1 - q.1))
+    };
+    if before["matrix"] == turned["matrix"] || moved(&before, &turned).is_none_or(|d| d < 1.0) {
+        return Err(format!(
+            "a drag of {ORBIT_DRAG_PX} px did not turn the view (a body moved {:?} px)",
+            moved(&before, &turned)
+        ));
+    }
+    let target = browser.eval("impulseViewer.view().target")?;
+    let target: Vec<f64> = target
+        .as_array()
+        .ok_or("no target")?
+        .iter()
+        .filter_map(Value::as_f64)
+        .collect();
+    let target = DVec3::new(target[0], target[1], target[2]);
+    let spread = |v: &Value| -> Option<f64> {
+        let (p, q) = (project(v, body)?, project(v, target)?);
+        Some((p.0 - q.0).hypot(p.1 - q.1))
+    };
+    browser.wheel(centre.0, centre.1, -ZOOM_WHEEL)?;
+    browser.eval("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")?;
+    let zoomed = browser.eval("impulseViewer.view()")?;
+    match (spread(&turned), spread(&zoomed)) {
+        (Some(a), Some(b)) if b > a * ZOOM_MIN_GAIN || a < 1.0 => {}
+        other => {
+            return Err(format!(
+                "a wheel turn of {ZOOM_WHEEL} did not zoom in (a body's distance from the \
+                 target on screen: {other:?} px)"
+            ));
+        }
+    }
+    // Scrubbing: a click on the slider moves the time and changes the picture (the first
+    // view again, at the start).
     browser.eval(&format!(
-        "impulseViewer.select(-1); impulseViewer.setTime({})",
+        "impulseViewer.frameAll(); impulseViewer.select(-1); impulseViewer.setTime({})",
         first.0
     ))?;
+    let (_, unscrubbed) = browser.screenshot()?;
     let rect = browser.eval(
         "(() => { const r = document.getElementById('scrub').getBoundingClientRect(); \
          return [r.left, r.top, r.width, r.height]; })()",
@@ -554,7 +606,7 @@ fn check_page(
     }
     let (_, scrubbed) = browser.screenshot()?;
     let view = browser.eval("impulseViewer.view()")?;
-    let (changed, all) = changed_pixels(&overview[0], &scrubbed, &view);
+    let (changed, all) = changed_pixels(&unscrubbed, &scrubbed, &view);
     if changed < MIN_CHANGED_PIXELS {
         return Err(format!(
             "scrubbing to t = {t:.3} s changed {changed} pixels of the view (need {MIN_CHANGED_PIXELS})"
@@ -562,7 +614,7 @@ fn check_page(
     }
     let changed = changed as f64 / all.max(1) as f64;
     let mut line = format!(
-        "{:>6.2} MB, {frames} frames, {hits}/{checks} centres hit, pick ok, scrub changed {:.1} % of the view",
+        "{:>6.2} MB, {frames} frames, {hits}/{checks} centres hit, pick, orbit and zoom ok, scrub changed {:.1} % of the view",
         bytes as f64 / 1e6,
         100.0 * changed
     );

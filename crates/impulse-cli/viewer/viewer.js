@@ -49,7 +49,7 @@
   /** Playback keeps at least this frame rate by drawing fewer pixels (the canvas scaled up):
    * every ADAPT_FRAMES frames, if their mean interval is longer, the resolution drops by
    * ADAPT_STEP, down to MIN_RENDER_SCALE. A paused view is always drawn at full resolution. */
-  const TARGET_FPS = 45;
+  const TARGET_FPS = 30;
   const ADAPT_FRAMES = 10;
   const ADAPT_STEP = 0.7;
   const MIN_RENDER_SCALE = 0.35;
@@ -888,16 +888,29 @@
       const ratio = canvas.width / Math.max(r.width, 1);
       return pickAt(x * ratio, y * ratio);
     },
-    /** World to clip coordinates (column-major 4×4) and the canvas's box in CSS pixels. */
+    /** World to clip coordinates (column-major 4×4), the camera's target (world) and the
+     * canvas's box in CSS pixels. */
     view: () => {
       const r = canvas.getBoundingClientRect();
-      return { matrix: Array.from(viewProjection()), left: r.left, top: r.top, width: r.width, height: r.height };
+      return {
+        matrix: Array.from(viewProjection()),
+        target: camera.target.slice(),
+        left: r.left,
+        top: r.top,
+        width: r.width,
+        height: r.height,
+      };
     },
     play: (speed) => {
       if (speed) state.speed = speed;
       play(true);
     },
     pause: () => play(false),
+    /** Frames the scene again (the first view) and draws. */
+    frameAll() {
+      frameAll();
+      draw();
+    },
     playing: () => state.playing,
     /** Frame intervals (ms, from requestAnimationFrame's timestamps while playing) and
      * draw times (ms of script per drawn frame), as count, mean and 95th percentile. */
