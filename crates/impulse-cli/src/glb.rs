@@ -233,21 +233,7 @@ pub fn to_glb(rec: &Recording, world: &World) -> Result<Vec<u8>, String> {
         },
         bin: Vec::new(),
     };
-    if rec.frames.is_empty() {
-        return Err("--gltf: the run recorded no frame".into());
-    }
-    if let Some(f) = rec
-        .frames
-        .iter()
-        .find(|f| f.bodies.len() != rec.names.len())
-    {
-        return Err(format!(
-            "--gltf: the frame at t = {} holds {} bodies, not the {} recorded",
-            f.time,
-            f.bodies.len(),
-            rec.names.len()
-        ));
-    }
+    crate::mesh::check_recording(rec, "--gltf")?;
     let times = f32s(rec.frames.iter().map(|f| f.time), &|| "a frame time".into())?;
     if let Some(w) = times.windows(2).find(|w| w[1] <= w[0]) {
         return Err(format!(

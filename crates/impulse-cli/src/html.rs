@@ -59,6 +59,8 @@ pub const FORMAT: &str = "impulse-viewer 1";
 /// Most impacts a page shows; beyond it the strongest are kept (a run with more impacts than
 /// this has more than a time line of markers can show anyway).
 pub const MAX_EVENTS: usize = 20_000;
+/// A page larger than this (bytes) is written with a warning: browsers open it slowly.
+pub const LARGE_PAGE_BYTES: usize = 200_000_000;
 /// The body index of an event's missing body (a contact with the world).
 pub const NO_BODY: u32 = u32::MAX;
 
@@ -104,6 +106,16 @@ pub fn title_of(path: &Path) -> String {
 /// What [`Replay::to_html`] refuses, or the file that cannot be written, named.
 pub fn write_replay(path: &Path, replay: &Replay) -> Result<(), String> {
     let text = replay.to_html()?;
+    if text.len() > LARGE_PAGE_BYTES {
+        eprintln!(
+            "warning: --html {}: the page is {:.0} MB ({} frames of {} bodies); browsers may be \
+             slow to open it: lower the scene's output_rate or --until",
+            path.display(),
+            text.len() as f64 / 1e6,
+            replay.frames.len(),
+            replay.bodies.len()
+        );
+    }
     std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
@@ -267,21 +279,7 @@ impl Replay {
         scene: &Scene,
         title: &str,
     ) -> Result<Self, String> {
-        if rec.frames.is_empty() {
-            return Err("--html: the run recorded no frame".into());
-        }
-        if let Some(f) = rec
-            .frames
-            .iter()
-            .find(|f| f.bodies.len() != rec.names.len())
-        {
-            return Err(format!(
-                "--html: the frame at t = {} holds {} bodies, not the {} recorded",
-                f.time,
-                f.bodies.len(),
-                rec.names.len()
-            ));
-        }
+        crate::mesh::check_recording(rec, "--html")?;
         let mut bodies = Vec::with_capacity(rec.names.len());
         for (name, &handle) in rec.names.iter().zip(&rec.handles) {
             let body = world

@@ -1,6 +1,7 @@
 //! The triangles that draw a body: each convex piece of its shape, in the body's own frame
 //! (the frame of its recorded position and rotation). Shared by the `--gltf` and `--html`
-//! outputs, so both draw exactly the same geometry.
+//! outputs, so both draw exactly the same geometry; and the check both make of the recording
+//! they draw ([`check_recording`]).
 //!
 //! A convex polyhedron is its faces, each triangulated as a fan with its own flat normal; an
 //! exact sphere or ellipsoid is a UV sphere of [`SPHERE_STACKS`] × [`SPHERE_SLICES`], scaled by
@@ -8,7 +9,32 @@
 
 use impulse_collide::Convex;
 use impulse_geom::{ConvexPolyhedron, DVec3, Pose};
+use impulse_sim::Recording;
 use impulse_sim::body::Body;
+
+/// Refuses a recording that cannot be drawn: no frame, or a frame that does not hold every
+/// recorded body. `flag` (`--gltf`, `--html`) starts the message.
+///
+/// # Errors
+/// The message, naming the frame.
+pub(crate) fn check_recording(rec: &Recording, flag: &str) -> Result<(), String> {
+    if rec.frames.is_empty() {
+        return Err(format!("{flag}: the run recorded no frame"));
+    }
+    match rec
+        .frames
+        .iter()
+        .find(|f| f.bodies.len() != rec.names.len())
+    {
+        Some(f) => Err(format!(
+            "{flag}: the frame at t = {} holds {} bodies, not the {} recorded",
+            f.time,
+            f.bodies.len(),
+            rec.names.len()
+        )),
+        None => Ok(()),
+    }
+}
 
 /// Latitude bands of the UV sphere drawn for an exact sphere or ellipsoid.
 pub const SPHERE_STACKS: u32 = 16;

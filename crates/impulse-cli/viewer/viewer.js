@@ -431,14 +431,18 @@
     }
     return lo;
   }
+  /** Binds `target` (null: the canvas), clears it to `background` and turns depth on. */
+  function beginPass(target, background) {
+    gl.bindFramebuffer(gl.FRAMEBUFFER, target);
+    gl.viewport(0, 0, canvas.width, canvas.height);
+    gl.clearColor(background[0], background[1], background[2], 1);
+    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+    gl.enable(gl.DEPTH_TEST);
+  }
   function draw() {
     const t0 = performance.now();
     resize();
-    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-    gl.viewport(0, 0, canvas.width, canvas.height);
-    gl.clearColor(0.875, 0.89, 0.91, 1);
-    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
-    gl.enable(gl.DEPTH_TEST);
+    beginPass(null, [0.875, 0.89, 0.91]);
     drawBodies(viewProjection(), false);
     updatePanels();
     drawTimes.push(performance.now() - t0);
@@ -459,11 +463,7 @@
       gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.RENDERBUFFER, colour);
       gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, depth);
     }
-    gl.bindFramebuffer(gl.FRAMEBUFFER, pickBuffer);
-    gl.viewport(0, 0, canvas.width, canvas.height);
-    gl.clearColor(0, 0, 0, 1);
-    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
-    gl.enable(gl.DEPTH_TEST);
+    beginPass(pickBuffer, [0, 0, 0]);
     drawBodies(viewProjection(), true);
     const px = new Uint8Array(4);
     gl.readPixels(Math.round(x), Math.round(canvas.height - 1 - y), 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
