@@ -7,7 +7,7 @@
 //! (multibody links are bodies, named `<multibody>/<link>`); `impulse reduce` makes one of a
 //! FORK⁻¹S reduced mechanism (its links are bodies).
 //!
-//! The page needs no network: the renderer and its controls (`viewer/viewer.js`,
+//! The page needs no network: the renderer and its controls (`viewer/*.js`,
 //! `viewer/viewer.css`, `viewer/viewer.html`, plain JavaScript written for this page, no
 //! library) are compiled into the program with `include_str!` and written inline, and the run
 //! itself is one base64 block of little-endian binary data described by a small JSON header.
@@ -51,8 +51,14 @@ use crate::mesh::{Triangles, body_triangles};
 const MARKUP: &str = include_str!("../viewer/viewer.html");
 /// The page's style sheet.
 const STYLE: &str = include_str!("../viewer/viewer.css");
-/// The renderer and its controls.
-const SCRIPT: &str = include_str!("../viewer/viewer.js");
+/// The renderer and its controls: four files of one script, joined in this order inside one
+/// function (one scope, strict mode); `viewer/data.js` says what each holds.
+const SCRIPT: [&str; 4] = [
+    include_str!("../viewer/data.js"),
+    include_str!("../viewer/render.js"),
+    include_str!("../viewer/panels.js"),
+    include_str!("../viewer/controls.js"),
+];
 
 /// The version of the data layout the script reads (checked by the script).
 pub const FORMAT: &str = "impulse-viewer 1";
@@ -477,8 +483,9 @@ fn page(title: &str, header: &str, data: &[u8]) -> String {
          <title>{} — impulse</title>\n<style>\n{STYLE}</style>\n</head>\n<body>\n{MARKUP}\
          <script type=\"application/json\" id=\"impulse-header\">{header}</script>\n\
          <script type=\"application/octet-stream\" id=\"impulse-data\">{data}</script>\n\
-         <script>\n{SCRIPT}</script>\n</body>\n</html>\n",
-        html_text(title)
+         <script>\n\"use strict\";\n(function () {{\n{}}})();\n</script>\n</body>\n</html>\n",
+        html_text(title),
+        SCRIPT.concat()
     )
 }
 
