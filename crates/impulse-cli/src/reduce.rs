@@ -108,6 +108,11 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
             return Err("--html replays a simulation: leave out --static".into());
         }
         crate::html::check_path(path)?;
+        crate::run::directory_exists("--html", path)?;
+    }
+    // The outputs' places are checked before the run, not after it.
+    if let Some(path) = &args.out {
+        crate::run::directory_exists("--out", path)?;
     }
     let t0 = Instant::now();
     let model = ReducedModel::build(

@@ -157,7 +157,7 @@ enum Format {
 }
 
 /// Refuses an output file whose directory does not exist (named with its option `flag`).
-fn directory_exists(flag: &str, file: &Path) -> Result<(), String> {
+pub(crate) fn directory_exists(flag: &str, file: &Path) -> Result<(), String> {
     let dir = match file.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),

@@ -197,3 +197,21 @@ fn hostile_names_stay_valid_json() {
             .any(|e| e["link"] == hostile)
     );
 }
+
+/// An output in a directory that does not exist is refused before the simulation, naming it.
+#[test]
+fn a_missing_output_directory_is_refused_before_the_run() {
+    for flag in ["--html", "--out"] {
+        let file = if flag == "--html" {
+            "/no/such/dir/y.html"
+        } else {
+            "/no/such/dir/y.csv"
+        };
+        let out = impulse(&["reduce", &mechanism("y.ron"), "--until", "100", flag, file]);
+        assert!(
+            !out.ok && out.stderr.contains("/no/such/dir") && out.stderr.contains(flag),
+            "{flag}: {}",
+            out.stderr
+        );
+    }
+}
