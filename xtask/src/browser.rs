@@ -253,7 +253,8 @@ impl Browser {
         self.events.push(v);
     }
 
-    /// The page's errors so far (console errors, uncaught exceptions, error log entries).
+    /// The page's errors since it was opened (console errors, uncaught exceptions, error log
+    /// entries).
     pub fn errors(&self) -> &[String] {
         &self.errors
     }
@@ -264,6 +265,7 @@ impl Browser {
     /// Navigation fails or the page does not load within [`COMMAND_TIMEOUT`].
     pub fn open(&mut self, url: &str) -> Result<()> {
         self.events.clear();
+        self.errors.clear();
         let r = self.call("Page.navigate", json!({"url": url}))?;
         if let Some(e) = r.get("errorText") {
             return Err(format!("cannot open {url}: {e}"));
@@ -306,10 +308,10 @@ impl Browser {
     /// # Errors
     /// The browser refuses the events.
     pub fn click(&mut self, x: f64, y: f64) -> Result<()> {
-        for kind in ["mousePressed", "mouseReleased"] {
+        for (kind, buttons) in [("mousePressed", 1), ("mouseReleased", 0)] {
             self.call(
                 "Input.dispatchMouseEvent",
-                json!({"type": kind, "x": x, "y": y, "button": "left", "buttons": 1, "clickCount": 1}),
+                json!({"type": kind, "x": x, "y": y, "button": "left", "buttons": buttons, "clickCount": 1}),
             )?;
         }
         Ok(())
@@ -360,6 +362,8 @@ impl Browser {
 
 impl Drop for Browser {
     fn drop(&mut self) {
+        // Browser.close belongs to the browser, not to the page's session.
+        self.session.clear();
         let _ = self.call("Browser.close", json!({}));
         let deadline = Instant::now() + Duration::from_secs(5);
         while Instant::now() < deadline {

@@ -1,18 +1,34 @@
 // Playback, input, the programming interface and the start (a part of the replay page's script: see data.js).
   // ---- Playback ------------------------------------------------------------------------
+  /** Moves the time cursor to `t` (s), kept in the run; a time that is not a number is
+   * ignored. */
   function setTime(t) {
-    state.time = Math.min(end, Math.max(start, Number(t)));
+    const x = Number(t);
+    if (!Number.isFinite(x)) return;
+    state.time = Math.min(end, Math.max(start, x));
     state.dirty = true;
   }
-  function step(direction) {
+  /** Stops playback: the picture is drawn at full resolution again. */
+  function stop() {
     state.playing = false;
-    const [k, s] = frameAt(state.time);
-    const target = direction > 0 ? Math.min(F - 1, k + 1) : s > 0 ? k : Math.max(0, k - 1);
-    setTime(times[target]);
+    state.renderScale = 1;
+    state.dirty = true;
+  }
+  /** To the next frame after the cursor, or the last frame before it (frames whose times are
+   * equal in f32 are passed over). */
+  function step(direction) {
+    stop();
+    let k = frameAt(state.time)[0];
+    if (direction > 0) {
+      while (k < F - 1 && times[k] <= state.time) k++;
+    } else {
+      while (k > 0 && times[k] >= state.time) k--;
+    }
+    setTime(times[k]);
   }
   function jumpToImpact(direction) {
     if (E === 0) return;
-    state.playing = false;
+    stop();
     const k = firstEventAfter(state.time);
     if (direction > 0) {
       let j = k;
@@ -21,9 +37,9 @@
     } else if (k > 0) setTime(eventNumbers[5 * (k - 1)]);
   }
   function play(on) {
+    if (!on) stop();
     state.playing = on;
     state.sinceAdapt = 0;
-    if (!on) state.renderScale = 1;
     if (on && state.time >= end) setTime(start);
     state.last = null;
     state.dirty = true;
@@ -46,7 +62,7 @@
           if ($("loop").checked) t = start + ((t - start) % Math.max(end - start, 1e-12));
           else {
             t = end;
-            state.playing = false;
+            stop();
           }
         }
         setTime(t);
@@ -61,8 +77,10 @@
   $("play").addEventListener("click", () => play(!state.playing));
   $("back").addEventListener("click", () => step(-1));
   $("forward").addEventListener("click", () => step(1));
+  scrub.addEventListener("pointerdown", () => (state.scrubbing = true));
+  window.addEventListener("pointerup", () => (state.scrubbing = false));
   scrub.addEventListener("input", () => {
-    state.playing = false;
+    stop();
     setTime(scrub.value);
   });
   $("speed").addEventListener("change", (e) => (state.speed = Number(e.target.value)));
@@ -70,7 +88,7 @@
   function timeFromPlot(e, left, right) {
     const r = e.currentTarget.getBoundingClientRect();
     const f = (e.clientX - r.left - left) / Math.max(r.width - left - right, 1);
-    state.playing = false;
+    stop();
     setTime(start + Math.min(1, Math.max(0, f)) * (end - start));
   }
   for (const [c, left, right] of [[energyCanvas, PLOT.left, PLOT.right], [eventsCanvas, 0, 0]]) {
@@ -120,13 +138,17 @@
     "wheel",
     (e) => {
       e.preventDefault();
-      camera.distance *= Math.exp(e.deltaY * ZOOM_PER_WHEEL);
+      // deltaMode 1 counts lines, 2 pages (Firefox sends lines): in pixels, about 16 and 800.
+      const pixels = e.deltaY * (e.deltaMode === 1 ? 16 : e.deltaMode === 2 ? 800 : 1);
+      camera.distance *= Math.exp(pixels * ZOOM_PER_WHEEL);
       state.dirty = true;
     },
     { passive: false },
   );
   window.addEventListener("keydown", (e) => {
     if (e.target instanceof HTMLSelectElement) return;
+    // Leave the browser's own shortcuts (Ctrl+F, Ctrl+P, …) alone.
+    if (e.ctrlKey || e.metaKey || e.altKey) return;
     const keys = {
       " ": () => play(!state.playing),
       ArrowLeft: () => step(-1),
@@ -167,7 +189,7 @@
     time: () => state.time,
     /** Moves the time cursor to `t` (s) and draws at once. */
     setTime(t) {
-      state.playing = false;
+      stop();
       setTime(t);
       draw();
     },

@@ -99,6 +99,16 @@
     at += 4 * n;
     return a;
   };
+  // The sections the header describes must fill the block exactly (checked before reading).
+  {
+    const B = header.bodies.length;
+    const F = header.frames;
+    const words =
+      header.meshes.reduce((n, m) => n + 6 * m.vertices + m.indices, 0) + F + 9 * F * B + 2 * F + 7 * header.events;
+    if (4 * words !== bytes.length) {
+      fail(`The data block holds ${bytes.length} bytes; its header accounts for ${4 * words}.`);
+    }
+  }
   const meshData = header.meshes.map((m) => ({
     positions: f32(3 * m.vertices),
     normals: f32(3 * m.vertices),

@@ -36,7 +36,7 @@
     const nearest = Math.min(F - 1, s < 0.5 ? k : k + 1);
     setText($("time"), `${state.time.toFixed(3)} / ${end.toFixed(3)} s`);
     setText($("clock"), `t = ${state.time.toFixed(3)} s`);
-    if (document.activeElement !== scrub) scrub.value = state.time;
+    if (!state.scrubbing) scrub.value = state.time;
     $("play").classList.toggle("playing", state.playing);
     if (state.selected !== shownInfo) {
       shownInfo = state.selected;
@@ -205,7 +205,10 @@
   const eventsCanvas = $("events");
   /** The largest impulse, for the markers' heights (log scale over four decades). */
   let biggest = 0;
-  for (let k = 0; k < E; k++) biggest = Math.max(biggest, eventNumbers[5 * k + 4]);
+  for (let k = 0; k < E; k++) {
+    const j = eventNumbers[5 * k + 4];
+    if (Number.isFinite(j)) biggest = Math.max(biggest, j);
+  }
   function plotEvents() {
     const drawn = canvas2d(eventsCanvas);
     if (!drawn) return;
@@ -217,7 +220,8 @@
     g.lineWidth = 1;
     g.beginPath();
     for (let k = 0; k < E; k++) {
-      const rel = Math.log10(Math.max(eventNumbers[5 * k + 4] / biggest, 1e-4)) / 4 + 1;
+      const j = eventNumbers[5 * k + 4];
+      const rel = biggest > 0 && Number.isFinite(j) ? Math.log10(Math.max(j / biggest, 1e-4)) / 4 + 1 : 0;
       const px = Math.round(x(eventNumbers[5 * k])) + 0.5;
       g.moveTo(px, h);
       g.lineTo(px, h - Math.max(3, rel * h));

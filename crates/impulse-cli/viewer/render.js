@@ -127,6 +127,8 @@
       const hi = [-Infinity, -Infinity, -Infinity];
       for (const b of list) {
         const [mlo, mhi] = meshBoxes[bodies[b].mesh];
+        // A body drawn with no triangles (a massless link) has no box.
+        if (!(mlo[0] <= mhi[0])) continue;
         const i = (frame * B + b) * 7;
         const p = poses.subarray(i, i + 3);
         const q = poses.subarray(i + 3, i + 7);
@@ -191,7 +193,18 @@
   }
 
   // ---- State and drawing ---------------------------------------------------------------
-  const state = { time: start, playing: false, speed: 1, selected: -1, last: null, dirty: true, renderScale: 1 };
+  const state = {
+    time: start,
+    playing: false,
+    speed: 1,
+    selected: -1,
+    last: null,
+    dirty: true,
+    renderScale: 1,
+    lowestScale: 1,
+    sinceAdapt: 0,
+    scrubbing: false,
+  };
   const frameIntervals = [];
   const drawTimes = [];
   let pickBuffer = null;
@@ -203,7 +216,11 @@
     if (canvas.width !== w || canvas.height !== h) {
       canvas.width = w;
       canvas.height = h;
-      pickBuffer = null;
+      if (pickBuffer) {
+        pickBuffer.attachments.forEach((r) => gl.deleteRenderbuffer(r));
+        gl.deleteFramebuffer(pickBuffer.framebuffer);
+        pickBuffer = null;
+      }
     }
   }
   function drawBodies(vp, pick) {
@@ -284,15 +301,16 @@
       const depth = gl.createRenderbuffer();
       gl.bindRenderbuffer(gl.RENDERBUFFER, depth);
       gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT24, canvas.width, canvas.height);
-      pickBuffer = gl.createFramebuffer();
-      gl.bindFramebuffer(gl.FRAMEBUFFER, pickBuffer);
+      const framebuffer = gl.createFramebuffer();
+      gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
       gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.RENDERBUFFER, colour);
       gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, depth);
+      pickBuffer = { framebuffer, attachments: [colour, depth] };
     }
-    beginPass(pickBuffer, [0, 0, 0]);
+    beginPass(pickBuffer.framebuffer, [0, 0, 0]);
     drawBodies(viewProjection(), true);
     const px = new Uint8Array(4);
-    gl.readPixels(Math.round(x), Math.round(canvas.height - 1 - y), 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    gl.readPixels(Math.floor(x), canvas.height - 1 - Math.floor(y), 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
     return px[0] + (px[1] << 8) + (px[2] << 16) - 1;
   }
