@@ -29,9 +29,11 @@
   const START_PITCH = (35 * Math.PI) / 180;
   /** Room around the framed bodies (1 = they touch the view's edges). */
   const FRAME_MARGIN = 1.15;
-  /** The first view takes in where the moving bodies end unless that grows the framed box
+  /** The first view takes in where the moving bodies go unless that grows the framed box
    * past this many times its size at the start. */
   const FRAME_GROWTH = 3;
+  /** Most frames the first view looks at (evenly spaced over the run). */
+  const FRAME_SAMPLES_FRAMED = 200;
   /** Fixed bodies up to this many times the moving bodies' extent are framed too. */
   const FIXED_FRAMED = 2;
   /** Near and far clip planes as fractions/multiples of the eye's distance. */

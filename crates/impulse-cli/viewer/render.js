@@ -115,10 +115,11 @@
   const east = norm(sub(axis, scale(up, dot(axis, up))));
   const north = cross(up, east);
   const camera = { target: [0, 0, 0], distance: 1, yaw: START_YAW, pitch: START_PITCH, size: 1 };
-  /** Frames the scene: the bodies that move, where they start and where they end, and the
-   * fixed bodies no larger than FIXED_FRAMED times their extent (a table, not a 100 m floor);
-   * every body when none moves. Not every frame of the run: a ball that rolls off the table
-   * would shrink the rest to a dot. */
+  /** Frames the scene: the bodies that move, where they go during the run (or, failing that,
+   * where they start and end), and the fixed bodies no larger than FIXED_FRAMED times their
+   * extent (a table, not a 100 m floor); every body when none moves. A run whose bodies spread
+   * past FRAME_GROWTH times their first extent (a ball rolling off the table) is framed as it
+   * starts, so the rest does not shrink to a dot. */
   function frameAll() {
     // The world box of the listed bodies' meshes as they start (each mesh's own box turned
     // by the body's rotation: its eight corners).
@@ -146,16 +147,30 @@
     const moving = all.filter((i) => bodies[i].kind !== "fixed");
     let [lo, hi] = box(moving.length ? moving : all);
     if (moving.length) {
-      // Where the moving bodies end too (dominos that fall), unless that spreads the box past
-      // FRAME_GROWTH times its size (a ball rolling off the table).
+      // Where the moving bodies go (sampled frames: a swinging arm, dominos that fall), else
+      // where they start and end, unless that spreads the box past FRAME_GROWTH times its
+      // size at the start (a ball rolling off the table).
       const extent = Math.hypot(...sub(hi, lo));
-      const [elo, ehi] = box(moving, F - 1);
-      const [ulo, uhi] = [lo.map((x, c) => Math.min(x, elo[c])), hi.map((x, c) => Math.max(x, ehi[c]))];
+      const union = (frames) => {
+        const u = [lo.slice(), hi.slice()];
+        for (const k of frames) {
+          const [flo, fhi] = box(moving, k);
+          for (let c = 0; c < 3; c++) {
+            u[0][c] = Math.min(u[0][c], flo[c]);
+            u[1][c] = Math.max(u[1][c], fhi[c]);
+          }
+        }
+        return u;
+      };
+      const every = Math.max(1, Math.ceil(F / FRAME_SAMPLES_FRAMED));
+      const sampled = Array.from({ length: Math.ceil(F / every) }, (_, j) => j * every).concat([F - 1]);
+      const [ulo, uhi] = [union(sampled), union([F - 1])].find(
+        ([a, b]) => Math.hypot(...sub(b, a)) <= FRAME_GROWTH * extent,
+      ) || [lo, hi];
       const grown = Math.hypot(...sub(uhi, ulo));
-      const whole = grown <= FRAME_GROWTH * extent;
-      const framed = all.filter((i) => bodies[i].kind !== "fixed" || 2 * bodies[i].radius <= FIXED_FRAMED * (whole ? grown : extent));
+      const framed = all.filter((i) => bodies[i].kind !== "fixed" || 2 * bodies[i].radius <= FIXED_FRAMED * grown);
       [lo, hi] = box(framed);
-      if (whole) [lo, hi] = [lo.map((x, c) => Math.min(x, ulo[c])), hi.map((x, c) => Math.max(x, uhi[c]))];
+      [lo, hi] = [lo.map((x, c) => Math.min(x, ulo[c])), hi.map((x, c) => Math.max(x, uhi[c]))];
     }
     if (!isFinite(lo[0])) return;
     camera.target = scale(add(lo, hi), 0.5);
