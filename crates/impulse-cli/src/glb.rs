@@ -87,17 +87,7 @@ fn f32s(
 ) -> Result<Vec<f32>, String> {
     values
         .into_iter()
-        .map(|x| {
-            let y = x as f32;
-            if y.is_finite() {
-                Ok(y)
-            } else {
-                Err(format!(
-                    "--gltf: {}: {x} cannot be written (not a finite f32)",
-                    what()
-                ))
-            }
-        })
+        .map(|x| crate::mesh::finite_f32(x, "--gltf", what))
         .collect()
 }
 

@@ -216,13 +216,11 @@ impl Block {
         what: &dyn Fn() -> String,
     ) -> Result<(), String> {
         for x in values {
-            let y = x as f32;
-            if finite && !y.is_finite() {
-                return Err(format!(
-                    "--html: {}: {x} cannot be written (not a finite f32)",
-                    what()
-                ));
-            }
+            let y = if finite {
+                crate::mesh::finite_f32(x, "--html", what)?
+            } else {
+                x as f32
+            };
             self.0.extend(y.to_le_bytes());
         }
         Ok(())
@@ -397,12 +395,15 @@ impl Replay {
             bytes.floats(positions.iter().copied(), true, &what)?;
             bytes.floats(normals.iter().copied(), true, &what)?;
             bytes.u32s(indices.iter().copied());
-            let next = meshes.len();
-            let k = *mesh_of.entry(bytes.0.clone()).or_insert(next);
-            if k == next {
-                meshes.push(json!({"vertices": positions.len() / 3, "indices": indices.len()}));
-                block.0.extend(bytes.0);
-            }
+            let k = match mesh_of.get(&bytes.0) {
+                Some(&k) => k,
+                None => {
+                    meshes.push(json!({"vertices": positions.len() / 3, "indices": indices.len()}));
+                    block.0.extend_from_slice(&bytes.0);
+                    mesh_of.insert(bytes.0, meshes.len() - 1);
+                    meshes.len() - 1
+                }
+            };
             body_meshes.push(k);
         }
 

@@ -12,6 +12,23 @@ use impulse_geom::{ConvexPolyhedron, DVec3, Pose};
 use impulse_sim::Recording;
 use impulse_sim::body::Body;
 
+/// `x` rounded to f32, the one place the drawing outputs round (both store f32), refusing a
+/// number that is not finite as an f32 (`flag`, e.g. `--gltf`, and `what` name it).
+///
+/// # Errors
+/// The message, naming the number and what it is.
+pub(crate) fn finite_f32(x: f64, flag: &str, what: &dyn Fn() -> String) -> Result<f32, String> {
+    let y = x as f32;
+    if y.is_finite() {
+        Ok(y)
+    } else {
+        Err(format!(
+            "{flag}: {}: {x} cannot be written (not a finite f32)",
+            what()
+        ))
+    }
+}
+
 /// Refuses a recording that cannot be drawn: no frame, or a frame that does not hold every
 /// recorded body. `flag` (`--gltf`, `--html`) starts the message.
 ///

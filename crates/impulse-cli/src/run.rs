@@ -115,8 +115,7 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         crate::html::write(path, &rec, &world, &scene)?;
     }
     if let Some(dir) = args.plot {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        // Created before the run.
         let energy = dir.join("energy.svg");
         std::fs::write(&energy, plot::energy_plot(&rec, &scene)?)
             .map_err(|e| format!("cannot write {}: {e}", energy.display()))?;

@@ -6,6 +6,7 @@
 
 mod common;
 
+use common::fixture;
 use resvg::{tiny_skia, usvg};
 
 /// Two text boxes that overlap by at most this much (pixels) in either direction touch rather
@@ -13,11 +14,6 @@ use resvg::{tiny_skia, usvg};
 const OVERLAP_TOLERANCE_PX: f32 = 0.5;
 /// A text box may reach this far (pixels) past the canvas's edge (antialiasing again).
 const EDGE_TOLERANCE_PX: f32 = 0.5;
-
-/// A file under the repository's `fixtures/`.
-fn fixture(path: &str) -> String {
-    format!("{}/../../fixtures/{path}", env!("CARGO_MANIFEST_DIR"))
-}
 
 /// The options with the machine's fonts; "sans-serif" is the first sans family found.
 fn options() -> usvg::Options<'static> {

@@ -5,15 +5,14 @@
 //! The runs are fractions of a second; `IMPULSE_PROGRESS_NOW` (progress.rs) makes them report
 //! from the start and at every update, as a run of minutes does at its pace.
 
+mod common;
+
 use std::process::Command;
+
+use common::fixture;
 
 /// A progress line longer than this (characters) is not a line a log reader can read.
 const MAX_LINE_CHARS: usize = 100;
-
-/// A file under the repository's `fixtures/`.
-fn fixture(path: &str) -> String {
-    format!("{}/../../fixtures/{path}", env!("CARGO_MANIFEST_DIR"))
-}
 
 /// Runs `impulse` with stderr piped; with `now`, progress from the first update. Returns
 /// stderr.

@@ -5,6 +5,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+/// The path of `path` under the workspace's `fixtures/`.
+pub fn fixture(path: &str) -> String {
+    format!("{}/../../fixtures/{path}", env!("CARGO_MANIFEST_DIR"))
+}
+
 /// A directory of its own under the system's temp dir (unique to this process and `name`),
 /// removed with everything a test wrote in it when dropped, also when the test fails: a test
 /// run leaves nothing behind.
