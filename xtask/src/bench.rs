@@ -291,15 +291,6 @@ fn to_csv(rows: &[Row]) -> String {
     s
 }
 
-/// Size of a scene's plot (SVG user units, pixels).
-const PLOT_SIZE: (u32, u32) = (640, 420);
-/// Space around the frame (pixels); right of it, half the last tick label fits.
-const PLOT_MARGIN: (u32, u32) = (12, 28);
-/// Label areas under and left of the frame: tick labels and axis title (pixels).
-const PLOT_LABEL_AREAS: (u32, u32) = (48, 72);
-/// Font sizes (plotters' units; the SVG's font-size is this / 1.24): title, axis titles, tick
-/// labels and point labels.
-const PLOT_FONTS: (f64, f64, f64) = (20.0, 16.0, 15.0);
 /// Radius of a setting's point, and its label's offset from it (pixels).
 const PLOT_POINT: (u32, i32) = (4, 7);
 /// Line and point colour.
@@ -374,7 +365,7 @@ impl plotters::coord::ranged1d::Ranged for Decades {
 fn plot(case: &str, rows: &[&Row]) -> Result<String> {
     use plotters::prelude::*;
     use plotters::style::text_anchor::{HPos, Pos, VPos};
-    let err = |e: &dyn std::fmt::Display| format!("{case}: cannot draw the plot: {e}");
+    let err = crate::plot::cannot_draw(case);
     let pts: Vec<(f64, f64, &str)> = rows
         .iter()
         .map(|r| {
@@ -385,40 +376,31 @@ fn plot(case: &str, rows: &[&Row]) -> Result<String> {
             )
         })
         .collect();
-    let font = |size: f64| -> TextStyle<'static> { ("sans-serif", size).into_font().into() };
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| err(&e))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!("{case}: error against slowdown"),
-                font(PLOT_FONTS.0),
-            )
-            .margin(PLOT_MARGIN.0)
-            .margin_right(PLOT_MARGIN.1)
-            .x_label_area_size(PLOT_LABEL_AREAS.0)
-            .y_label_area_size(PLOT_LABEL_AREAS.1)
+        let root = SVGBackend::with_string(&mut svg, crate::plot::SIZE).into_drawing_area();
+        root.fill(&WHITE).map_err(&err)?;
+        let mut chart = crate::plot::chart(&root, format!("{case}: error against slowdown"))
             .build_cartesian_2d(
                 Decades::covering(pts.iter().map(|p| p.0)),
                 Decades::covering(pts.iter().map(|p| p.1)),
             )
-            .map_err(|e| err(&e))?;
+            .map_err(&err)?;
         chart
             .configure_mesh()
             .x_desc("slowdown (wall time / simulated time)")
             .y_desc("error (largest relative deviation)")
-            .axis_desc_style(font(PLOT_FONTS.1))
-            .label_style(font(PLOT_FONTS.2))
+            .axis_desc_style(crate::plot::font(crate::plot::FONTS.1))
+            .label_style(crate::plot::font(crate::plot::FONTS.2))
             .x_label_formatter(&Decades::label)
             .y_label_formatter(&Decades::label)
             .bold_line_style(RGBColor(0xcc, 0xcc, 0xcc))
             .light_line_style(RGBColor(0xee, 0xee, 0xee))
             .draw()
-            .map_err(|e| err(&e))?;
+            .map_err(&err)?;
         chart
             .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1)), PLOT_COLOUR))
-            .map_err(|e| err(&e))?;
+            .map_err(&err)?;
         let (radius, offset) = PLOT_POINT;
         let middle = |d: Decades| 10f64.powf(0.5 * f64::from(d.0 + d.1));
         let x_middle = middle(Decades::covering(pts.iter().map(|p| p.0)));
@@ -437,13 +419,13 @@ fn plot(case: &str, rows: &[&Row]) -> Result<String> {
                 } else {
                     (offset, VPos::Top)
                 };
-                let style = font(PLOT_FONTS.2).pos(Pos::new(h, v));
+                let style = crate::plot::font(crate::plot::FONTS.2).pos(Pos::new(h, v));
                 EmptyElement::at((x, y))
                     + Circle::new((0, 0), radius, PLOT_COLOUR.filled())
                     + Text::new(name, (dx, dy), style)
             }))
-            .map_err(|e| err(&e))?;
-        root.present().map_err(|e| err(&e))?;
+            .map_err(&err)?;
+        root.present().map_err(&err)?;
     }
     Ok(svg)
 }

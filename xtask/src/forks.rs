@@ -489,15 +489,6 @@ fn write(dir: &Path, name: &str, text: &str) -> Result<()> {
     std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
-/// Size of a Fig. 7 plot (SVG user units, pixels).
-const PLOT_SIZE: (u32, u32) = (640, 420);
-/// Space around the frame (pixels); right of it, half the last tick label fits.
-const PLOT_MARGIN: (u32, u32) = (12, 28);
-/// Label areas under and left of the frame: tick labels and axis title (pixels).
-const PLOT_LABEL_AREAS: (u32, u32) = (48, 72);
-/// Font sizes (plotters' units; the SVG's font-size is this / 1.24): title, axis titles, tick
-/// and legend labels.
-const PLOT_FONTS: (f64, f64, f64) = (20.0, 16.0, 15.0);
 /// Width of the legend's line samples and the space after them (pixels).
 const PLOT_LEGEND_AREA: i32 = 36;
 /// Tick labels are rounded to this many decimals (plotters' ticks are 1, 2 or 5 × 10^k; this
@@ -508,7 +499,8 @@ const PLOT_LABEL_DECIMALS: i32 = 9;
 /// each against its own end effector's displacement.
 fn plot(name: &str, rows: &[Fig7Row]) -> Result<String> {
     use plotters::prelude::*;
-    let err = |e: &dyn std::fmt::Display| format!("fig7-{name}: cannot draw the plot: {e}");
+    let what = format!("fig7-{name}");
+    let err = crate::plot::cannot_draw(&what);
     let xmax = rows
         .iter()
         .map(|r| r.single_displacement.max(r.blended_displacement))
@@ -519,7 +511,6 @@ fn plot(name: &str, rows: &[Fig7Row]) -> Result<String> {
         .map(|r| r.single.max(r.blended))
         .fold(0.0, f64::max)
         .max(1e-12);
-    let font = |size: f64| -> TextStyle<'static> { ("sans-serif", size).into_font().into() };
     let label = |v: &f64| {
         let scale = 10f64.powi(PLOT_LABEL_DECIMALS);
         format!("{}", (v * scale).round() / scale)
@@ -536,42 +527,40 @@ fn plot(name: &str, rows: &[Fig7Row]) -> Result<String> {
     ];
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| err(&e))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!("{name}: constraint error against displacement"),
-                font(PLOT_FONTS.0),
-            )
-            .margin(PLOT_MARGIN.0)
-            .margin_right(PLOT_MARGIN.1)
-            .x_label_area_size(PLOT_LABEL_AREAS.0)
-            .y_label_area_size(PLOT_LABEL_AREAS.1)
-            .build_cartesian_2d(0.0..xmax, 0.0..ymax)
-            .map_err(|e| err(&e))?;
+        let root = SVGBackend::with_string(&mut svg, crate::plot::SIZE).into_drawing_area();
+        root.fill(&WHITE).map_err(&err)?;
+        let mut chart = crate::plot::chart(
+            &root,
+            format!("{name}: constraint error against displacement"),
+        )
+        .build_cartesian_2d(0.0..xmax, 0.0..ymax)
+        .map_err(&err)?;
         chart
             .configure_mesh()
             .x_desc("relative end-effector displacement ‖(v/r, ω/π)‖")
             .y_desc("relative constraint error")
-            .axis_desc_style(font(PLOT_FONTS.1))
-            .label_style(font(PLOT_FONTS.2))
+            .axis_desc_style(crate::plot::font(crate::plot::FONTS.1))
+            .label_style(crate::plot::font(crate::plot::FONTS.2))
             .x_label_formatter(&label)
             .y_label_formatter(&label)
             .bold_line_style(RGBColor(0xdd, 0xdd, 0xdd))
             .light_line_style(WHITE)
             .draw()
-            .map_err(|e| err(&e))?;
+            .map_err(&err)?;
         for (title, colour, point) in curves {
             chart
                 .draw_series(LineSeries::new(
                     rows.iter().map(point),
                     colour.stroke_width(2),
                 ))
-                .map_err(|e| err(&e))?
+                .map_err(&err)?
                 .label(title)
                 .legend(move |(x, y)| {
                     PathElement::new(
-                        vec![(x, y), (x + PLOT_LEGEND_AREA - PLOT_MARGIN.0 as i32, y)],
+                        vec![
+                            (x, y),
+                            (x + PLOT_LEGEND_AREA - crate::plot::MARGIN.0 as i32, y),
+                        ],
                         colour.stroke_width(2),
                     )
                 });
@@ -579,14 +568,14 @@ fn plot(name: &str, rows: &[Fig7Row]) -> Result<String> {
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperLeft)
-            .margin(PLOT_MARGIN.0)
+            .margin(crate::plot::MARGIN.0)
             .legend_area_size(PLOT_LEGEND_AREA)
-            .label_font(font(PLOT_FONTS.2))
+            .label_font(crate::plot::font(crate::plot::FONTS.2))
             .background_style(WHITE)
             .border_style(BLACK)
             .draw()
-            .map_err(|e| err(&e))?;
-        root.present().map_err(|e| err(&e))?;
+            .map_err(&err)?;
+        root.present().map_err(&err)?;
     }
     Ok(svg)
 }

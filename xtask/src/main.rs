@@ -28,6 +28,7 @@ mod package;
 // Without the `peers` feature the runner is built (so CI checks it) but has no engine to call.
 #[cfg_attr(not(feature = "peers"), allow(dead_code))]
 mod peers;
+mod plot;
 mod poses;
 mod stacks;
 mod validate;
