@@ -10,9 +10,10 @@
 
 use std::io::IsTerminal as _;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle};
 
 /// Work shorter than this (wall seconds) shows no progress at all.
 pub(crate) const SHOW_AFTER_S: f64 = 2.0;
@@ -27,6 +28,7 @@ const BAR_WIDTH: usize = 30;
 pub(crate) const NOW_VAR: &str = "IMPULSE_PROGRESS_NOW";
 
 /// What the work is counted in.
+#[derive(Clone, Copy)]
 enum Measure {
     /// Whole pieces of work (`unit`: "throws", "drops").
     Count(&'static str),
@@ -47,8 +49,21 @@ pub(crate) struct Progress {
     /// Thresholds in force (the constants, or zero under [`NOW_VAR`]).
     show_after: f64,
     line_every: f64,
-    /// Wall time of the last plain line, and whether the bar or a line was shown.
-    state: Mutex<(f64, bool)>,
+    /// Whether the bar is on screen (a terminal).
+    shown: AtomicBool,
+    /// Wall time of the last plain line (not a terminal).
+    last_line: Mutex<f64>,
+}
+
+impl Measure {
+    /// Where the work is, `pos` of `len`: `12/40 throws`, `t = 1.250 / 5 s`. The bar and the
+    /// plain lines say it the same way.
+    fn done(self, pos: u64, len: u64) -> String {
+        match self {
+            Measure::Count(unit) => format!("{pos}/{len} {unit}"),
+            Measure::Time(until) => format!("t = {:.3} / {until} s", pos as f64 / TICKS_PER_S),
+        }
+    }
 }
 
 impl Progress {
@@ -67,16 +82,17 @@ impl Progress {
     }
 
     fn new(prefix: &'static str, len: u64, measure: Measure) -> Self {
-        let template = match measure {
-            Measure::Count(unit) => {
-                format!("{{prefix}} [{{bar:{BAR_WIDTH}}}] {{pos}}/{{len}} {unit}, {{eta}} left")
-            }
-            Measure::Time(_) => {
-                format!("{{prefix}} [{{bar:{BAR_WIDTH}}}] {{msg}}, {{eta}} left")
-            }
-        };
+        let template = format!("{{prefix}} [{{bar:{BAR_WIDTH}}}] {{done}}, {{eta}} left");
+        // `{done}` is written only when the bar is drawn, from its own position.
         let style = ProgressStyle::with_template(&template)
             .expect("the template is valid")
+            .with_key(
+                "done",
+                move |state: &ProgressState, w: &mut dyn std::fmt::Write| {
+                    let pos = state.pos();
+                    let _ = w.write_str(&measure.done(pos, state.len().unwrap_or(pos)));
+                },
+            )
             .progress_chars("=> ");
         let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::hidden())
             .with_style(style)
@@ -90,38 +106,39 @@ impl Progress {
             start: Instant::now(),
             show_after: if now { 0.0 } else { SHOW_AFTER_S },
             line_every: if now { 0.0 } else { LINE_EVERY_S },
-            state: Mutex::new((0.0, false)),
+            shown: AtomicBool::new(false),
+            last_line: Mutex::new(0.0),
         }
     }
 
     /// `done` pieces of work are done (a count).
     pub(crate) fn set(&self, done: u64) {
-        self.update(done, None);
+        self.update(done);
     }
 
     /// Simulated time `t` is reached (a run in time).
     pub(crate) fn set_time(&self, t: f64) {
-        self.update((t * TICKS_PER_S) as u64, Some(t));
+        self.update((t * TICKS_PER_S) as u64);
     }
 
-    fn update(&self, pos: u64, t: Option<f64>) {
-        if let (Some(t), Measure::Time(until)) = (t, &self.measure) {
-            self.bar.set_message(format!("t = {t:.3} / {until} s"));
-        }
+    fn update(&self, pos: u64) {
         self.bar.set_position(pos);
+        if self.terminal && self.shown.load(Ordering::Relaxed) {
+            return;
+        }
         let wall = self.start.elapsed().as_secs_f64();
         if wall < self.show_after {
             return;
         }
-        let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
         if self.terminal {
-            if !state.1 {
-                state.1 = true;
+            if !self.shown.swap(true, Ordering::Relaxed) {
                 self.bar.set_draw_target(ProgressDrawTarget::stderr());
             }
-        } else if wall - state.0 >= self.line_every {
-            state.0 = wall;
-            state.1 = true;
+            return;
+        }
+        let mut last = self.last_line.lock().unwrap_or_else(|e| e.into_inner());
+        if wall - *last >= self.line_every {
+            *last = wall;
             eprintln!("{}", self.line(wall));
         }
     }
@@ -131,13 +148,10 @@ impl Progress {
         let pos = self.bar.position();
         let len = self.bar.length().unwrap_or(pos).max(1);
         let percent = 100.0 * pos as f64 / len as f64;
-        let done = match self.measure {
-            Measure::Count(unit) => format!("{pos}/{len} {unit}"),
-            Measure::Time(until) => format!("t = {:.3} / {until} s", pos as f64 / TICKS_PER_S),
-        };
         format!(
-            "{}: {done} ({percent:.0} %, {} wall)",
+            "{}: {} ({percent:.0} %, {} wall)",
             self.prefix,
+            self.measure.done(pos, len),
             crate::text::duration(wall)
         )
     }
@@ -146,9 +160,8 @@ impl Progress {
     /// if the work lasted long enough to show progress.
     pub(crate) fn finish(&self) {
         let wall = self.start.elapsed().as_secs_f64();
-        let state = self.state.lock().unwrap_or_else(|e| e.into_inner());
         if self.terminal {
-            if state.1 {
+            if self.shown.load(Ordering::Relaxed) {
                 self.bar.finish();
             }
         } else if wall >= self.show_after {
