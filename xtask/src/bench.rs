@@ -299,6 +299,7 @@ const PLOT_COLOUR: plotters::style::RGBColor = plotters::style::RGBColor(0x1f, 0
 /// A logarithmic axis over whole decades `10^.0 ..= 10^.1`: ticks and grid at the decades,
 /// lighter grid at 2..9 times them. (plotters' own log axis also labels 2, 5… when there is
 /// room, which crowds a short axis.)
+#[derive(Clone, Copy)]
 pub(crate) struct Decades(pub i32, pub i32);
 
 impl Decades {
@@ -351,7 +352,7 @@ impl plotters::coord::ranged1d::Ranged for Decades {
                 } else {
                     &[1.0]
                 };
-                m.iter().map(move |m| m * d).collect::<Vec<_>>()
+                m.iter().map(move |m| m * d)
             })
             .collect()
     }
@@ -376,15 +377,14 @@ fn plot(case: &str, rows: &[&Row]) -> Result<String> {
             )
         })
         .collect();
+    let x_decades = Decades::covering(pts.iter().map(|p| p.0));
+    let y_decades = Decades::covering(pts.iter().map(|p| p.1));
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, crate::plot::SIZE).into_drawing_area();
         root.fill(&WHITE).map_err(&err)?;
         let mut chart = crate::plot::chart(&root, format!("{case}: error against slowdown"))
-            .build_cartesian_2d(
-                Decades::covering(pts.iter().map(|p| p.0)),
-                Decades::covering(pts.iter().map(|p| p.1)),
-            )
+            .build_cartesian_2d(x_decades, y_decades)
             .map_err(&err)?;
         chart
             .configure_mesh()
@@ -403,8 +403,7 @@ fn plot(case: &str, rows: &[&Row]) -> Result<String> {
             .map_err(&err)?;
         let (radius, offset) = PLOT_POINT;
         let middle = |d: Decades| 10f64.powf(0.5 * f64::from(d.0 + d.1));
-        let x_middle = middle(Decades::covering(pts.iter().map(|p| p.0)));
-        let y_middle = middle(Decades::covering(pts.iter().map(|p| p.1)));
+        let (x_middle, y_middle) = (middle(x_decades), middle(y_decades));
         chart
             .draw_series(pts.iter().map(|&(x, y, name)| {
                 // A name goes toward the middle of the frame from its point (right of a point
