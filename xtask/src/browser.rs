@@ -23,39 +23,24 @@ use serde_json::{Value, json};
 
 use crate::Result;
 
-/// Names of the Chromium program tried on `PATH`, in order (after `$CHROMIUM`).
-const PROGRAMS: [&str; 4] = [
-    "chromium",
-    "chromium-browser",
-    "google-chrome",
-    "google-chrome-stable",
-];
 /// How long one protocol command may take before the test gives up.
 const COMMAND_TIMEOUT: Duration = Duration::from_secs(60);
 
-/// The Chromium program: `$CHROMIUM` if set, else the first of [`PROGRAMS`] on `PATH`.
+/// The Chromium program: `$CHROMIUM`, which `cargo xtask` sets to the program it found or
+/// installed (`xtask/launcher`, which owns the list of prerequisites and where to look).
 ///
 /// # Errors
-/// None found, with how to install one.
+/// `CHROMIUM` is not set (xtask was run without the launcher), with what to run instead.
 pub fn find() -> Result<PathBuf> {
-    if let Some(p) = std::env::var_os("CHROMIUM") {
-        return Ok(PathBuf::from(p));
+    match std::env::var_os("CHROMIUM") {
+        Some(p) if !p.is_empty() => Ok(PathBuf::from(p)),
+        _ => Err(
+            "CHROMIUM is not set: run the viewer test as `cargo xtask viewer` (or `cargo \
+                  xtask ci`), which finds Chromium or installs it and says how to get it \
+                  when it cannot, or set CHROMIUM to the program"
+                .to_owned(),
+        ),
     }
-    let path = std::env::var_os("PATH").unwrap_or_default();
-    for dir in std::env::split_paths(&path) {
-        for name in PROGRAMS {
-            let candidate = dir.join(name);
-            if candidate.is_file() {
-                return Ok(candidate);
-            }
-        }
-    }
-    Err(format!(
-        "no Chromium found (tried $CHROMIUM, then {} on PATH): the viewer test opens the pages \
-         in headless Chromium. Install it (Debian/Ubuntu: `apt-get install chromium`; `.ci/run` \
-         does this when it is missing) or set CHROMIUM to the program",
-        PROGRAMS.join(", ")
-    ))
 }
 
 /// A running headless browser with one page open.

@@ -1,0 +1,57 @@
+//! `cargo xtask ci` on a machine without Chromium and without a way to install it stops at
+//! once, naming the program and how to get it (the launcher's promise: before any build).
+
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+/// The launcher must answer well within the 10 s a user waits for a missing-program message.
+const ANSWER_WITHIN: Duration = Duration::from_secs(10);
+
+#[test]
+fn a_missing_program_without_a_package_manager_stops_in_seconds_with_what_to_run() {
+    // An empty PATH: no Chromium, no apt-get, no sudo, no `id` (so not known to be root).
+    let empty = std::env::temp_dir().join(format!("xtask-launcher-empty-{}", std::process::id()));
+    std::fs::create_dir_all(&empty).unwrap();
+    let start = Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_xtask-launcher"))
+        .arg("ci")
+        .env("PATH", &empty)
+        .env_remove("CHROMIUM")
+        .env_remove("XTASK_NO_INSTALL")
+        .output()
+        .unwrap();
+    let elapsed = start.elapsed();
+    let _ = std::fs::remove_dir(&empty);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(elapsed < ANSWER_WITHIN, "took {elapsed:?}");
+    assert!(stderr.contains("needs what this machine lacks"), "{stderr}");
+    assert!(stderr.contains("- chromium: not found"), "{stderr}");
+    assert!(stderr.contains("`apt-get install chromium`"), "{stderr}");
+    assert!(stderr.contains("set CHROMIUM to the program"), "{stderr}");
+    // Nothing after the check ran: xtask was not built or started.
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("==> prerequisites"));
+}
+
+#[test]
+fn a_program_named_by_its_variable_is_used_when_it_answers_and_refused_when_not() {
+    let dir = std::env::temp_dir().join(format!("xtask-launcher-env-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let missing = dir.join("no-such-chromium");
+    let out = Command::new(env!("CARGO_BIN_EXE_xtask-launcher"))
+        .arg("viewer")
+        .env("CHROMIUM", &missing)
+        .env("XTASK_NO_INSTALL", "1")
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir(&dir);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "$CHROMIUM is {}, which does not answer `--version`",
+            missing.display()
+        )),
+        "{stderr}"
+    );
+}
