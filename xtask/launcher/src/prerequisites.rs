@@ -290,7 +290,7 @@ pub fn plan(prerequisite: &Prerequisite, host: &Host) -> Plan {
                 Plan::Run(vec![cmd])
             } else {
                 Plan::Manual(format!(
-                    "no rustup on PATH: add the `{component}` component to your Rust toolchain \
+                    "No rustup on PATH: add the `{component}` component to your Rust toolchain \
                      with the tool that installed it (with rustup: `{}`)",
                     cmd.shown()
                 ))
@@ -306,7 +306,7 @@ pub fn plan(prerequisite: &Prerequisite, host: &Host) -> Plan {
             let Some((manager, package)) = found else {
                 let known: Vec<String> = packages.iter().map(|(m, p)| m.shown(p)).collect();
                 return Plan::Manual(format!(
-                    "no package manager this check knows is on PATH ({}): install {} with the \
+                    "No package manager this check knows is on PATH ({}): install {} with the \
                      system's own (for example `{}`)",
                     Manager::ALL.map(Manager::program).join(", "),
                     prerequisite.name,
@@ -325,7 +325,7 @@ pub fn plan(prerequisite: &Prerequisite, host: &Host) -> Plan {
                 )
             } else {
                 Plan::Manual(format!(
-                    "installing it needs root, and this is not root and sudo asks for a \
+                    "Installing it needs root, and this is not root and sudo asks for a \
                      password: run `sudo {}`",
                     manager.shown(package)
                 ))
@@ -340,7 +340,7 @@ pub fn find(prerequisite: &Prerequisite, cargo: &Path) -> Result<Option<PathBuf>
     match &prerequisite.probe {
         Probe::CargoSubcommand(sub) => {
             let mut command = Command::new(cargo);
-            command.args([sub, &"--version"]);
+            command.arg(sub);
             if answers(command) {
                 Ok(None)
             } else {
