@@ -231,8 +231,8 @@ impl Cmd {
 pub struct Host {
     /// The process runs as root.
     pub root: bool,
-    /// `sudo -n true` succeeds: sudo works without a password.
-    pub passwordless_sudo: bool,
+    /// What `sudo` can do for us.
+    pub sudo: Sudo,
     /// The package managers found on `PATH`, in [`Manager::ALL`] order.
     pub managers: Vec<Manager>,
     /// `rustup` is on `PATH`.
@@ -247,18 +247,23 @@ impl Host {
             .stderr(Stdio::null())
             .output()
             .is_ok_and(|out| out.status.success() && out.stdout.trim_ascii() == b"0");
-        let passwordless_sudo = !root
-            && on_path("sudo").is_some()
-            && Command::new("sudo")
-                .args(["-n", "true"])
-                .stdin(Stdio::null())
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .status()
-                .is_ok_and(|s| s.success());
+        let sudo = if root || on_path("sudo").is_none() {
+            Sudo::Absent
+        } else if Command::new("sudo")
+            .args(["-n", "true"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+        {
+            Sudo::Passwordless
+        } else {
+            Sudo::AsksPassword
+        };
         Host {
             root,
-            passwordless_sudo,
+            sudo,
             managers: Manager::ALL
                 .into_iter()
                 .filter(|m| on_path(m.program()).is_some())
@@ -266,6 +271,18 @@ impl Host {
             rustup: on_path("rustup").is_some(),
         }
     }
+}
+
+/// Whether `sudo` can run a command as root without a person at the keyboard.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Sudo {
+    /// No `sudo` on `PATH`.
+    #[default]
+    Absent,
+    /// `sudo -n true` fails: it would ask for a password.
+    AsksPassword,
+    /// `sudo -n true` succeeds.
+    Passwordless,
 }
 
 /// How a missing prerequisite can be got on a host.
@@ -315,7 +332,7 @@ pub fn plan(prerequisite: &Prerequisite, host: &Host) -> Plan {
             };
             if host.root {
                 Plan::Run(manager.commands(package))
-            } else if host.passwordless_sudo {
+            } else if host.sudo == Sudo::Passwordless {
                 Plan::Run(
                     manager
                         .commands(package)
@@ -323,10 +340,16 @@ pub fn plan(prerequisite: &Prerequisite, host: &Host) -> Plan {
                         .map(Cmd::with_sudo)
                         .collect(),
                 )
+            } else if host.sudo == Sudo::AsksPassword {
+                Plan::Manual(format!(
+                    "Installing it needs root; this is not root and sudo asks for a password: \
+                     run `sudo {}`",
+                    manager.shown(package)
+                ))
             } else {
                 Plan::Manual(format!(
-                    "Installing it needs root, and this is not root and sudo asks for a \
-                     password: run `sudo {}`",
+                    "Installing it needs root; this is not root and there is no sudo: run `{}` \
+                     as root",
                     manager.shown(package)
                 ))
             }
@@ -440,10 +463,10 @@ mod tests {
         PREREQUISITES.iter().find(|p| p.name == "chromium").unwrap()
     }
 
-    fn host(root: bool, sudo: bool, managers: &[Manager]) -> Host {
+    fn host(root: bool, sudo: Sudo, managers: &[Manager]) -> Host {
         Host {
             root,
-            passwordless_sudo: sudo,
+            sudo,
             managers: managers.to_vec(),
             rustup: true,
         }
@@ -458,7 +481,7 @@ mod tests {
 
     #[test]
     fn root_with_apt_updates_then_installs_without_questions() {
-        let plan = plan(chromium(), &host(true, false, &[Manager::Apt]));
+        let plan = plan(chromium(), &host(true, Sudo::Absent, &[Manager::Apt]));
         assert_eq!(
             shown(&plan),
             [
@@ -471,9 +494,15 @@ mod tests {
 
     #[test]
     fn passwordless_sudo_goes_through_sudo_n_with_the_environment_on_its_line() {
-        let plan = plan(chromium(), &host(false, true, &[Manager::Dnf]));
+        let plan = plan(
+            chromium(),
+            &host(false, Sudo::Passwordless, &[Manager::Dnf]),
+        );
         assert_eq!(shown(&plan), ["sudo -n dnf install -y chromium"]);
-        let plan = super::plan(chromium(), &host(false, true, &[Manager::Apt]));
+        let plan = super::plan(
+            chromium(),
+            &host(false, Sudo::Passwordless, &[Manager::Apt]),
+        );
         assert_eq!(
             shown(&plan)[1],
             "sudo -n DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
@@ -483,17 +512,28 @@ mod tests {
 
     #[test]
     fn neither_root_nor_sudo_names_the_command_to_run() {
-        match plan(chromium(), &host(false, false, &[Manager::Apt])) {
-            Plan::Manual(text) => {
-                assert!(text.contains("`sudo apt-get install chromium`"), "{text}")
-            }
+        match plan(
+            chromium(),
+            &host(false, Sudo::AsksPassword, &[Manager::Apt]),
+        ) {
+            Plan::Manual(text) => assert!(
+                text.contains("sudo asks for a password: run `sudo apt-get install chromium`"),
+                "{text}"
+            ),
+            Plan::Run(cmds) => panic!("no way to install, yet planned {cmds:?}"),
+        }
+        match plan(chromium(), &host(false, Sudo::Absent, &[Manager::Apt])) {
+            Plan::Manual(text) => assert!(
+                text.contains("no sudo: run `apt-get install chromium` as root"),
+                "{text}"
+            ),
             Plan::Run(cmds) => panic!("no way to install, yet planned {cmds:?}"),
         }
     }
 
     #[test]
     fn no_known_package_manager_lists_the_usual_commands() {
-        match plan(chromium(), &host(true, false, &[])) {
+        match plan(chromium(), &host(true, Sudo::Absent, &[])) {
             Plan::Manual(text) => {
                 assert!(text.contains("apt-get install chromium"), "{text}");
                 assert!(text.contains("dnf install chromium"), "{text}");
@@ -506,7 +546,7 @@ mod tests {
     fn the_first_manager_found_is_used() {
         let plan = plan(
             chromium(),
-            &host(true, false, &[Manager::Pacman, Manager::Apk]),
+            &host(true, Sudo::Absent, &[Manager::Pacman, Manager::Apk]),
         );
         assert_eq!(shown(&plan), ["pacman -S --noconfirm --needed chromium"]);
     }
@@ -514,7 +554,7 @@ mod tests {
     #[test]
     fn rust_components_need_rustup_not_root() {
         let rustfmt = PREREQUISITES.iter().find(|p| p.name == "rustfmt").unwrap();
-        let plan = plan(rustfmt, &host(false, false, &[]));
+        let plan = plan(rustfmt, &host(false, Sudo::Absent, &[]));
         assert_eq!(shown(&plan), ["rustup component add rustfmt"]);
         let no_rustup = Host {
             rustup: false,
