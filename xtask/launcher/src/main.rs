@@ -139,7 +139,7 @@ fn install(
             ))
         }
         Plan::Run(cmds) => {
-            println!("==> {name} is missing ({why}); {purpose}. Installing it:");
+            println!("==> {name}: {why}; {purpose}. Installing it:");
             for cmd in &cmds {
                 println!("==> {}", cmd.shown());
                 cmd.run().map_err(|e| {
