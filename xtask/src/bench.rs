@@ -79,7 +79,14 @@ pub struct Options {
     /// Set when already running in the release build.
     pub in_release: bool,
     /// Run the peer comparison ([`crate::peers`]) instead: built with the `peers` feature.
+    /// With `scale`, the peer runs the scale scenes too.
     pub peers: bool,
+    /// Run the scale bench ([`crate::scale`]) instead.
+    pub scale: bool,
+    /// With `scale`: only the scenes whose name contains this.
+    pub only: Option<String>,
+    /// With `scale`: the wall budget of one run (s).
+    pub budget: Option<f64>,
 }
 
 /// One row of the table.
@@ -117,6 +124,15 @@ pub fn run_bench(options: &Options) -> Result<()> {
         if let Some(case) = &options.case {
             cmd.args(["--case", case]);
         }
+        if options.scale {
+            cmd.arg("--scale");
+        }
+        if let Some(only) = &options.only {
+            cmd.args(["--only", only]);
+        }
+        if let Some(budget) = options.budget {
+            cmd.args(["--budget", &budget.to_string()]);
+        }
         let status = cmd
             .status()
             .map_err(|e| format!("cannot start the release build: {e}"))?;
@@ -131,6 +147,14 @@ pub fn run_bench(options: &Options) -> Result<()> {
         .clone()
         .unwrap_or_else(|| crate::workspace_root().join("target").join("bench"));
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    if options.scale {
+        return crate::scale::run(&crate::scale::Options {
+            out: Some(out),
+            only: options.only.clone(),
+            budget: options.budget,
+            peers: options.peers,
+        });
+    }
     if options.peers {
         return crate::peers::run(&out);
     }

@@ -30,6 +30,7 @@ mod package;
 mod peers;
 mod plot;
 mod poses;
+mod scale;
 mod stacks;
 mod validate;
 mod viewer;
@@ -66,6 +67,14 @@ commands:
                                       --peers runs stacks, dominos, ramp, sliding→rolling and
                                       pool break in impulse and rapier3d-f64 side by side
                                       (builds xtask with --features peers; peers.csv, peers.svg)
+  bench --scale [--peers] [--only NAME] [--budget SECONDS] [--out DIR]
+                                      piles of 27, 216 and 1000 boxes and spheres and a
+                                      pyramid of 20 rows: cost against body count on one
+                                      thread (1000 boxes also on two, checked bit-identical),
+                                      each run judged from its frames (overlap, depth below
+                                      the ground, rest, drift); --peers adds rapier at dt
+                                      1/60 and 1 ms; a run stops after --budget wall seconds
+                                      (default 600); scale.csv, scale.svg, scenes/*.ron
   package                             package every crate under crates/ for crates.io, in
                                       layer order, without uploading or building them
                                       (into target/package-check)
@@ -165,7 +174,8 @@ fn parse_validate(args: &[String]) -> Result<validate::Options> {
     Ok(options)
 }
 
-/// Parses `bench [--out DIR] [--case NAME] [--in-release] [--peers]`.
+/// Parses `bench [--out DIR] [--case NAME] [--in-release] [--peers] [--scale] [--only NAME]
+/// [--budget SECONDS]`.
 fn parse_bench(args: &[String]) -> Result<bench::Options> {
     let mut options = bench::Options::default();
     let mut args = args.iter();
@@ -177,6 +187,22 @@ fn parse_bench(args: &[String]) -> Result<bench::Options> {
             }
             "--in-release" => options.in_release = true,
             "--peers" => options.peers = true,
+            "--scale" => options.scale = true,
+            "--only" => {
+                options.only = Some(args.next().ok_or("`--only` needs a scene name")?.clone())
+            }
+            "--budget" => {
+                let value = args.next().ok_or("`--budget` needs seconds")?;
+                let budget: f64 = value
+                    .parse()
+                    .map_err(|_| format!("`--budget {value}`: not a number of seconds"))?;
+                if !(budget.is_finite() && budget > 0.0) {
+                    return Err(format!(
+                        "`--budget {value}`: must be a positive number of seconds"
+                    ));
+                }
+                options.budget = Some(budget);
+            }
             _ => return Err(format!("unexpected argument `{arg}` to `bench`")),
         }
     }

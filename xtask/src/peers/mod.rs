@@ -17,7 +17,7 @@
 
 pub mod measure;
 #[cfg(feature = "peers")]
-mod rapier;
+pub mod rapier;
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -221,13 +221,33 @@ fn bench_engine(
 }
 
 /// The peer engine's runs of a scene: one row per configuration.
+/// The peer's configurations of the scale bench ([`crate::scale`]).
+#[cfg(feature = "peers")]
+pub fn rapier_configs() -> &'static [rapier::Config] {
+    &rapier::SCALE_CONFIGS
+}
+
+/// Runs `scene` in the peer (see `rapier::run`).
+///
+/// # Errors
+/// A body the peer cannot take.
+#[cfg(feature = "peers")]
+pub fn run_rapier(
+    scene: &Scene,
+    config: &rapier::Config,
+    budget: f64,
+    record_rate: Option<f64>,
+) -> Result<(Trajectory, f64)> {
+    rapier::run(scene, config, budget, record_rate)
+}
+
 #[cfg(feature = "peers")]
 fn peer_rows(ps: &PeerScene) -> Vec<Row> {
     rapier::CONFIGS
         .iter()
         .map(|config| {
             bench_engine(ps, config.name, &ps.scene, |s| {
-                rapier::run(s, config, WALL_BUDGET)
+                rapier::run(s, config, WALL_BUDGET, None)
             })
         })
         .collect()

@@ -42,6 +42,18 @@ pub struct Config {
     pub dt: f64,
 }
 
+/// The rapier runs of the scale bench ([`crate::scale`]): its default step, and 1 ms.
+pub const SCALE_CONFIGS: [Config; 2] = [
+    Config {
+        name: "rapier dt 1/60",
+        dt: 1.0 / 60.0,
+    },
+    Config {
+        name: "rapier dt 1 ms",
+        dt: 1e-3,
+    },
+];
+
 /// The rapier runs of the bench: its default step, and a 4× finer one.
 pub const CONFIGS: [Config; 2] = [
     Config {
@@ -132,12 +144,19 @@ fn collider(b: &BodyDesc) -> Result<ColliderBuilder, String> {
 }
 
 /// Runs `scene` in rapier with `config` until the scene's duration or until `budget` wall
-/// seconds have passed, whichever comes first; returns every step's states and the wall time
-/// of the stepping (the world is built before the clock starts, as for `impulse`).
+/// seconds have passed, whichever comes first; returns the states of every step (or, with
+/// `record_rate`, of the first step at or after each multiple of 1/`record_rate`) and the
+/// wall time of the stepping (the world is built before the clock starts, as for `impulse`;
+/// recording is outside the clock).
 ///
 /// # Errors
 /// A body rapier cannot take (its name and why), or a scene without a duration.
-pub fn run(scene: &Scene, config: &Config, budget: f64) -> Result<(Trajectory, f64), String> {
+pub fn run(
+    scene: &Scene,
+    config: &Config,
+    budget: f64,
+    record_rate: Option<f64>,
+) -> Result<(Trajectory, f64), String> {
     let desc = &scene.desc;
     let duration = desc.duration.ok_or("the scene has no duration")?;
     let mut materials: Vec<&str> = desc.bodies.iter().map(|b| b.material.as_str()).collect();
@@ -222,8 +241,10 @@ pub fn run(scene: &Scene, config: &Config, budget: f64) -> Result<(Trajectory, f
     };
     let steps = (duration / config.dt).round() as u64;
     let mut frames = vec![frame(&bodies, 0.0)];
-    let start = Instant::now();
+    let mut wall = 0.0;
+    let mut next_record = 1u64;
     for k in 1..=steps {
+        let start = Instant::now();
         pipeline.step(
             gravity,
             &parameters,
@@ -239,12 +260,19 @@ pub fn run(scene: &Scene, config: &Config, budget: f64) -> Result<(Trajectory, f
             &hooks,
             &(),
         );
-        frames.push(frame(&bodies, k as f64 * config.dt));
-        if start.elapsed().as_secs_f64() > budget {
+        wall += start.elapsed().as_secs_f64();
+        let t = k as f64 * config.dt;
+        let due = record_rate.is_none_or(|rate| t * rate >= next_record as f64 * (1.0 - 1e-9));
+        if due || k == steps {
+            frames.push(frame(&bodies, t));
+            if let Some(rate) = record_rate {
+                next_record = (t * rate * (1.0 + 1e-9)).floor() as u64 + 1;
+            }
+        }
+        if wall > budget {
             break;
         }
     }
-    let wall = start.elapsed().as_secs_f64();
     let names = desc.bodies.iter().map(|b| b.name.clone()).collect();
     Ok((Trajectory { names, frames }, wall))
 }
@@ -265,6 +293,28 @@ mod tests {
         assert!((length_unit(g("block-on-ramp")) - 100.0).abs() < 1e-12);
     }
 
+    /// With a recording rate, a frame is kept at the start, at the first step at or after each
+    /// multiple of the frame period, and at the end: 0.2 s at 10 frames per second with steps
+    /// of 1/240 s keeps t = 0, 0.1, 0.2.
+    #[test]
+    fn a_recording_rate_keeps_one_frame_per_period() {
+        let text = "Scene(gravity: (0.0, 0.0, -9.81), duration: 0.2, bodies: [
+            Body(name: \"ball\", shape: Sphere(radius: 0.1), position: (0.0, 0.0, 3.0))])";
+        let desc = impulse_sim::SceneDesc::from_ron(text, "test").unwrap();
+        let (traj, _) = run(
+            &Scene::new(desc, "."),
+            &CONFIGS[1],
+            f64::INFINITY,
+            Some(10.0),
+        )
+        .unwrap();
+        let times: Vec<f64> = traj.frames.iter().map(|f| f.time).collect();
+        assert_eq!(times.len(), 3, "{times:?}");
+        for (t, expected) in times.iter().zip([0.0, 0.1, 0.2]) {
+            assert!((t - expected).abs() < 1e-12, "{times:?}");
+        }
+    }
+
     /// A ball dropped in rapier falls freely under the scene's gravity, starting from the
     /// scene's pose and velocity: after 0.2 s it has fallen v0·t + g t²/2 to within what the
     /// symplectic Euler step adds (g·dt·t/2), and its mass is the scene's density times its
@@ -277,7 +327,7 @@ mod tests {
         let desc = impulse_sim::SceneDesc::from_ron(text, "test").unwrap();
         let scene = Scene::new(desc, ".");
         let config = &CONFIGS[1];
-        let (traj, _) = run(&scene, config, f64::INFINITY).unwrap();
+        let (traj, _) = run(&scene, config, f64::INFINITY, None).unwrap();
         let last = traj.frames.last().unwrap();
         let t = last.time;
         let s = last.bodies[0];
@@ -302,7 +352,7 @@ mod tests {
                 Body(name: \"puck\", shape: Box(half_extents: (0.05, 0.05, 0.02)),
                      position: (0.0, 0.0, 0.02), velocity: (1.0, 0.0, 0.0), material: \"ice\")])";
         let desc = impulse_sim::SceneDesc::from_ron(text, "test").unwrap();
-        let (traj, _) = run(&Scene::new(desc, "."), &CONFIGS[1], 1.0).unwrap();
+        let (traj, _) = run(&Scene::new(desc, "."), &CONFIGS[1], 1.0, None).unwrap();
         let last = traj.frames.last().unwrap();
         let expected = 1.0 - 0.05 * 9.81 * last.time;
         let v = last.bodies[1].velocity.x;
@@ -318,7 +368,7 @@ mod tests {
         let text = "Scene(duration: 0.1, bodies: [Body(name: \"coin\",
             shape: Prism(sides: 8, radius: 0.01, half_height: 0.002))])";
         let desc = impulse_sim::SceneDesc::from_ron(text, "test").unwrap();
-        let err = run(&Scene::new(desc, "."), &CONFIGS[0], 1.0).unwrap_err();
+        let err = run(&Scene::new(desc, "."), &CONFIGS[0], 1.0, None).unwrap_err();
         assert!(err.contains("coin") && err.contains("Prism"), "{err}");
     }
 
@@ -329,7 +379,7 @@ mod tests {
         let text = "Scene(duration: 0.05, gravity: (0.0, 0.0, 0.0), bodies: [Body(name: \"t\",
             shape: Hull(points: [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]))])";
         let desc = impulse_sim::SceneDesc::from_ron(text, "test").unwrap();
-        let (traj, _) = run(&Scene::new(desc, "."), &CONFIGS[0], 1.0).unwrap();
+        let (traj, _) = run(&Scene::new(desc, "."), &CONFIGS[0], 1.0, None).unwrap();
         let com = traj.frames[0].bodies[0].com;
         assert!((com - DVec3::splat(0.25)).length() < 1e-9, "{com}");
     }
