@@ -6,7 +6,7 @@
 //! anyone else can run the same geometry). `impulse` runs each on one thread, and the pile of
 //! 1000 boxes again on two, whose trajectory must be bit for bit the one-thread run's; with
 //! `--peers` rapier3d-f64 runs each at dt 1/60 and 1 ms. Every run records frames at
-//! [`scenes::FRAME_RATE`] and is judged from its frames alone ([`judge`]: deepest overlap,
+//! [`scenes::FRAME_RATE`] and is judged from its frames alone ([`judge::judge`]: deepest overlap,
 //! depth below the ground, speed at the end, drift), the same judge for every engine.
 //!
 //! Output: a table on stdout with the cost (wall time of the stepping ÷ simulated time) and
