@@ -197,6 +197,34 @@ impl CollisionHeap {
         self.entries.first().map(|e| (e.pair, e.toi))
     }
 
+    /// Every pair whose key is below `t`, with its key, in heap order (key, then pair). Walks
+    /// only the part of the heap above `t`: O(k) for k pairs found.
+    #[must_use]
+    pub fn due_before(&self, t: f64) -> Vec<(Pair, f64)> {
+        let mut found = Vec::new();
+        let mut stack = Vec::new();
+        if self.entries.first().is_some_and(|e| e.toi < t) {
+            stack.push(0usize);
+        }
+        while let Some(i) = stack.pop() {
+            let e = self.entries[i];
+            found.push(e);
+            for child in [2 * i + 1, 2 * i + 2] {
+                if self.entries.get(child).is_some_and(|c| c.toi < t) {
+                    stack.push(child);
+                }
+            }
+        }
+        found.sort_by(|x, y| {
+            if precedes(x, y) {
+                Ordering::Less
+            } else {
+                Ordering::Greater
+            }
+        });
+        found.into_iter().map(|e| (e.pair, e.toi)).collect()
+    }
+
     /// Every pair in the heap involving `body`, in ascending order of the partner's index.
     pub fn pairs_of(&self, body: u32) -> impl Iterator<Item = Pair> + '_ {
         self.partners
@@ -616,6 +644,22 @@ mod tests {
             assert_eq!(heap.len(), model.toi.len());
             assert_eq!(heap.is_empty(), model.toi.is_empty());
             assert_eq!(heap.peek(), model.top());
+            if step % 17 == 0 {
+                // The pairs below a bound, in heap order, as the ordered map lists them.
+                let bound = random_toi(&mut rng);
+                let want: Vec<(Pair, u64)> = model
+                    .order
+                    .iter()
+                    .take_while(|(k, _)| k.0 < bound)
+                    .map(|(k, p)| (*p, k.0.to_bits()))
+                    .collect();
+                let got: Vec<(Pair, u64)> = heap
+                    .due_before(bound)
+                    .into_iter()
+                    .map(|(p, t)| (p, t.to_bits()))
+                    .collect();
+                assert_eq!(got, want, "step {step}: pairs below {bound}");
+            }
             assert_eq!(
                 heap.toi((y, x)).map(f64::to_bits),
                 model.toi.get(&norm).map(|t| t.to_bits())

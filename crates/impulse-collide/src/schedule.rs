@@ -186,7 +186,8 @@ pub fn free_coefficients(motion: &Motion, max_reach: f64) -> Option<(f64, f64)> 
     match motion {
         Motion::Fixed { .. } => Some((0.0, 0.0)),
         Motion::Ballistic(m) => Some((
-            0.5 * m.gravity().length() + 0.5 * max_reach * m.omega_growth(),
+            0.5 * (m.gravity().length() + m.acceleration_pad())
+                + 0.5 * max_reach * m.omega_growth(),
             m.velocity().length() + max_reach * m.omega_max(),
         )),
         _ => None,

@@ -134,6 +134,9 @@ pub struct Body {
     pub(crate) held_force: DVec3,
     /// The contact torque an island holds on the body over its current step (world).
     pub(crate) held_torque: DVec3,
+    /// The loads the heap keys of an island body were computed for (`world/envelope.rs`);
+    /// `None`: for its exact load.
+    pub(crate) envelope: Option<crate::world::envelope::Envelope>,
     /// Asleep: at rest in a sleeping island, it does not move until woken.
     pub(crate) asleep: bool,
     /// For a link: its multibody (index in the world) and link.
@@ -184,6 +187,7 @@ impl Body {
             step_hint: 0.0,
             held_force: DVec3::ZERO,
             held_torque: DVec3::ZERO,
+            envelope: None,
             asleep: false,
             link: None,
         }
@@ -269,7 +273,7 @@ impl Body {
     }
 
     /// External torque plus the contact torque an island holds (world).
-    fn total_torque(&self) -> DVec3 {
+    pub(crate) fn total_torque(&self) -> DVec3 {
         self.torque + self.held_torque
     }
 
@@ -399,6 +403,20 @@ impl Body {
                 let wb = self.pose.rotation.inverse() * self.omega;
                 let acc = self.acceleration(gravity);
                 let torque = self.total_torque();
+                // An island body's keys hold for every load in its envelope
+                // (`world/envelope.rs`), which holds its actual load.
+                if let Some(e) = self.envelope.filter(|e| e.holds(acc, torque)) {
+                    let Ok(ballistic) = impulse_collide::motion::omega_max_momentum(m.moments, wb)
+                        .and_then(|w| {
+                            Ballistic::new(com, self.velocity, e.accel, w)?
+                                .with_acceleration_pad(e.accel_pad)?
+                                .with_omega_growth(e.torque_max / m.moments.min_element())
+                        })
+                    else {
+                        return Motion::Unbounded { com };
+                    };
+                    return Motion::Ballistic(ballistic);
+                }
                 let torqued = torque != DVec3::ZERO;
                 let omega_max = if torqued {
                     impulse_collide::motion::omega_max_momentum(m.moments, wb)

@@ -24,6 +24,12 @@ use super::{
 /// α_max on ‖ω̇‖ during the flight, which give a second rotational bound that is much tighter
 /// for a body spinning about the direction of approach (a top on a table), see
 /// [`Ballistic::toi_coefficients_for_gap`].
+///
+/// Optionally ([`Ballistic::with_acceleration_pad`]) the acceleration is known only to lie
+/// within a ball of radius `pad` about `gravity` (a body whose contact load a solver changes
+/// from step to step, within bounds): every bound then holds for every path whose
+/// acceleration stays in that ball, so it need not be recomputed while the load stays
+/// there.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ballistic {
     com: DVec3,
@@ -34,6 +40,9 @@ pub struct Ballistic {
     spin: Option<(DVec3, f64)>,
     /// β (rad/s²): ‖ω(t0 + τ)‖ ≤ omega_max + β·τ. Zero for a torque-free body.
     omega_growth: f64,
+    /// Radius (m/s²) of the ball of accelerations about `gravity` the bounds cover; zero for
+    /// an acceleration known exactly.
+    accel_pad: f64,
 }
 
 impl Ballistic {
@@ -55,7 +64,29 @@ impl Ballistic {
             omega_max: non_negative("omega_max", omega_max)?,
             spin: None,
             omega_growth: 0.0,
+            accel_pad: 0.0,
         })
+    }
+
+    /// Widens the bounds to every acceleration within `pad` (m/s²) of `gravity`: the centre of
+    /// mass's displacement along d̂ over τ is then at most `(v·d̂)·τ + ½·(g·d̂ + pad·|d̂|)·τ²`,
+    /// and the swept box grows by ½·pad·Δt² on every axis. A padded motion gets no spin
+    /// refinement (it assumes the torque-free ω̇ bound).
+    ///
+    /// # Errors
+    /// [`MotionError::NonFinite`] or [`MotionError::InvalidParameter`] for a NaN, infinite or
+    /// negative `pad`.
+    pub fn with_acceleration_pad(self, pad: f64) -> Result<Self, MotionError> {
+        Ok(Self {
+            accel_pad: non_negative("accel_pad", pad)?,
+            ..self
+        })
+    }
+
+    /// The radius of the ball of accelerations about `gravity` the bounds cover (m/s²).
+    #[must_use]
+    pub fn acceleration_pad(&self) -> f64 {
+        self.accel_pad
     }
 
     /// Lets the angular-speed bound grow linearly with time: ‖ω(t0 + τ)‖ ≤ omega_max + β·τ,
@@ -126,15 +157,19 @@ impl Ballistic {
     /// its speed along d̂ is at most `[v(t0) + g·(t−t0)]·d̂ + r_max·ω_max`; integrating,
     /// `A = ½·g·d̂` and `B = v(t0)·d̂ + r_max·ω_max·|d̂|`. Exact (equality) for a body that does
     /// not rotate (`omega_max = 0`). With a growing ω bound (torque, β > 0) the rotational speed
-    /// bound r_max·(ω_max + β·t) adds `½·r_max·β·|d̂|` to `A`.
+    /// bound r_max·(ω_max + β·t) adds `½·r_max·β·|d̂|` to `A`, and an acceleration pad
+    /// ([`Ballistic::with_acceleration_pad`]) adds `½·pad·|d̂|`.
     #[must_use]
     pub fn toi_coefficients(&self, d_hat: DVec3, r_max: f64) -> (f64, f64) {
         let len = d_hat.length();
         if !(len.is_finite() && r_max >= 0.0 && r_max.is_finite()) {
             return UNBOUNDED_COEFFICIENTS;
         }
-        // (2.2), plus the rotational reach of the ω bound's growth under torque: ∫β·t = ½β·τ².
-        let a = 0.5 * self.gravity.dot(d_hat) + 0.5 * r_max * self.omega_growth * len;
+        // (2.2), plus the rotational reach of the ω bound's growth under torque: ∫β·t = ½β·τ²,
+        // plus the acceleration pad.
+        let a = 0.5 * self.gravity.dot(d_hat)
+            + 0.5 * self.accel_pad * len
+            + 0.5 * r_max * self.omega_growth * len;
         let b = self.velocity.dot(d_hat) + r_max * self.omega_max * len; // (2.3)
         (a, b)
     }
@@ -152,8 +187,8 @@ impl Ballistic {
         let Some((omega, alpha)) = self.spin else {
             return base;
         };
-        if self.omega_growth > 0.0 {
-            return base; // the spin refinement assumes no torque
+        if self.omega_growth > 0.0 || self.accel_pad > 0.0 {
+            return base; // the spin refinement assumes no torque and a known acceleration
         }
         if base == UNBOUNDED_COEFFICIENTS || !gap.is_finite() {
             return base;
@@ -196,6 +231,13 @@ impl Ballistic {
                 }
             }
         }
+        // Any acceleration within the pad moves the centre at most ½·pad·Δt² from the
+        // parabola along any axis.
+        let spread = 0.5 * self.accel_pad * (dt * dt);
+        let b = Aabb {
+            min: b.min - DVec3::splat(spread),
+            max: b.max + DVec3::splat(spread),
+        };
         let scale =
             self.com.abs() + self.velocity.abs() * dt.abs() + 0.5 * self.gravity.abs() * (dt * dt);
         pad(b, scale)
@@ -228,7 +270,8 @@ impl Ballistic {
             self.gravity,
             omega_max,
         )?
-        .with_omega_growth(self.omega_growth)
+        .with_omega_growth(self.omega_growth)?
+        .with_acceleration_pad(self.accel_pad)
     }
 }
 
@@ -320,6 +363,68 @@ mod tests {
             "spin refinement chosen for {refined_used} of {} directions; {checked} vertex checks",
             CASES * 12
         );
+    }
+
+    /// A padded motion bounds every path whose acceleration stays in its ball, even one whose
+    /// acceleration changes at every sub-step (a load a solver resets each step): the
+    /// displacement along d̂ stays under `A·τ² + B·τ` and the centre inside the swept box, and
+    /// a path pushed along d̂ at the pad's rim the whole time meets the bound (it is tight).
+    #[test]
+    fn an_acceleration_pad_covers_every_acceleration_in_its_ball() {
+        const CASES: usize = 200;
+        const SUBSTEPS: usize = 64;
+        let mut rng = rng(31);
+        for case in 0..CASES {
+            let g =
+                DVec3::new(0.0, 0.0, -9.81) + unit_vector(&mut rng) * rng.random_range(0.0..5.0);
+            let pad = rng.random_range(0.05..5.0);
+            let v0 = unit_vector(&mut rng) * rng.random_range(0.0..2.0);
+            let m = Ballistic::new(DVec3::ZERO, v0, g, 0.0)
+                .unwrap()
+                .with_acceleration_pad(pad)
+                .unwrap();
+            let d = unit_vector(&mut rng);
+            let (a, b) = m.toi_coefficients(d, 0.0);
+            let span = rng.random_range(0.01..0.5);
+            let swept = m.swept_com_aabb(span);
+            let h = span / SUBSTEPS as f64;
+            let (mut x, mut v) = (DVec3::ZERO, v0);
+            let (mut rim, mut rim_v) = (0.0, v0.dot(d));
+            for k in 0..SUBSTEPS {
+                let push = if k % 3 == 0 {
+                    d
+                } else {
+                    unit_vector(&mut rng) * rng.random_range(0.0..1.0)
+                };
+                let acc = g + push * pad;
+                x += v * h + acc * (0.5 * h * h);
+                v += acc * h;
+                rim += rim_v * h + 0.5 * (g.dot(d) + pad) * h * h;
+                rim_v += (g.dot(d) + pad) * h;
+                let tau = (k + 1) as f64 * h;
+                let bound = a * tau * tau + b * tau;
+                let slack = 1e-12 * (1.0 + bound.abs());
+                assert!(
+                    x.dot(d) <= bound + slack,
+                    "case {case} τ {tau}: {} > {bound}",
+                    x.dot(d)
+                );
+                assert!(
+                    (rim - bound).abs() <= 1e-9 * (1.0 + bound.abs()),
+                    "case {case}: not tight"
+                );
+                let inside =
+                    (0..3).all(|i| swept.min[i] <= x[i] + slack && x[i] <= swept.max[i] + slack);
+                assert!(inside, "case {case}: {x} outside {swept:?}");
+            }
+        }
+        // Without the pad the coefficients are the thesis's (eq. 2.2).
+        let plain = Ballistic::new(DVec3::ZERO, DVec3::X, DVec3::NEG_Z, 0.0).unwrap();
+        assert_eq!(plain.toi_coefficients(DVec3::NEG_Z, 0.0), (0.5, 0.0));
+        let padded = plain.with_acceleration_pad(2.0).unwrap();
+        assert_eq!(padded.toi_coefficients(DVec3::NEG_Z, 0.0), (1.5, 0.0));
+        assert!(plain.with_acceleration_pad(-1.0).is_err());
+        assert!(plain.with_acceleration_pad(f64::NAN).is_err());
     }
 
     #[test]

@@ -562,6 +562,8 @@ impl World {
         if !self.stale.contains(&i) {
             self.stale.push(i);
         }
+        // Its keys are computed again for its exact load (`envelope.rs`).
+        self.b_mut(i).envelope = None;
         // A change by the program (or a load) wakes a sleeping island and is a transient for
         // an awake one: its island steps now.
         self.wake(i);

@@ -12,6 +12,7 @@ use impulse_response::{
 use rustc_hash::FxHashMap;
 
 use super::World;
+use super::envelope::Envelope;
 use super::held_links::{predict_systems, write_members};
 use super::hold::PairContact;
 use super::hold::{TurnSide, approach_speed};
@@ -143,6 +144,9 @@ pub(super) struct Islands {
     /// Islands (by their first body) whose direct solves failed at their last steps: how
     /// many in a row, and until when their solves go without one ([`DIRECT_BACKOFF_MAX`]).
     direct_backoff: FxHashMap<u32, (u32, f64)>,
+    /// Bodies whose last island step left their load envelope or changed their velocity
+    /// (`world/envelope.rs`): their heap pairs need new keys. Drained by each island step.
+    moved: Vec<u32>,
 }
 
 impl Islands {
@@ -155,6 +159,7 @@ impl Islands {
             due: FxHashMap::default(),
             still_since: FxHashMap::default(),
             direct_backoff: FxHashMap::default(),
+            moved: Vec::new(),
         }
     }
 }
@@ -307,6 +312,7 @@ impl World {
                 let b = self.b_mut(i);
                 b.held_force = DVec3::ZERO;
                 b.held_torque = DVec3::ZERO;
+                b.envelope = None;
                 b.asleep = false;
                 self.islands.still_since.remove(&i);
                 self.islands.due.remove(&i);
@@ -594,7 +600,10 @@ impl World {
             for &i in &island.bodies {
                 self.islands.due.insert(i, t + h);
             }
-            touched.extend(&island.bodies);
+            // A dynamic body's keys hold while its load stays in its envelope; a link's
+            // motion is its multibody's, re-keyed with it.
+            touched.extend(island.bodies.iter().filter(|&&i| !self.b(i).is_dynamic()));
+            touched.append(&mut self.islands.moved);
             self.counters.island_steps += 1;
             self.sleep_if_still(island);
         }
@@ -986,11 +995,19 @@ impl World {
             });
             let torque = b.inertia_world() * (bodies[k].omega - predicted[k].omega) / h;
             let (v, w) = (after_jolt[k].velocity, after_jolt[k].omega);
+            let g = self.gravity;
             let b = self.b_mut(i);
+            // An impulsive solve changed the velocity: every key of the body is stale.
+            let jolted = b.velocity != v || b.omega != w;
             b.velocity = v;
             b.omega = w;
             b.held_force = force;
             b.held_torque = torque;
+            let (a, tau) = (b.acceleration(g), b.total_torque());
+            if jolted || !b.envelope.is_some_and(|e| e.holds(a, tau)) {
+                b.envelope = Some(Envelope::about(b, g, b.envelope.as_ref()));
+                self.islands.moved.push(i);
+            }
         }
         self.hold_link_loads(&sources, &systems_after_jolt, &after_jolt, &solution, h)?;
         // Keep each point's impulse for the next step's warm start.
@@ -1076,6 +1093,7 @@ impl World {
                 b.omega = DVec3::ZERO;
                 b.held_force = DVec3::ZERO;
                 b.held_torque = DVec3::ZERO;
+                b.envelope = None;
             }
             self.counters.sleeps += 1;
         }

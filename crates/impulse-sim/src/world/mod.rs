@@ -43,6 +43,7 @@
 mod api;
 mod check;
 mod control;
+pub(crate) mod envelope;
 mod held_links;
 mod hold;
 mod hybrid;
@@ -821,6 +822,8 @@ impl World {
 
 #[cfg(test)]
 mod island_tests;
+#[cfg(test)]
+mod keys_tests;
 
 #[cfg(test)]
 mod control_tests;

@@ -70,6 +70,7 @@ impl World {
         let backup = self.clone();
         self.recent.clear();
         let run = |w: &mut World| -> Result<(), SimError> {
+            w.refuse_unbounded()?;
             w.rekey_stale()?;
             while w.time < t {
                 w.loop_step(t)?;
@@ -129,6 +130,26 @@ impl World {
             && self.islands.next_step > t
     }
 
+    /// Refuses a moving body whose motion cannot be bounded (its angular velocity's energy
+    /// overflows, say, after the program set it): no time may pass with it. The loop checks the
+    /// bodies that move at every step that moves them; a step that ends where it starts skips
+    /// that, so the state the program left is checked here first.
+    fn refuse_unbounded(&self) -> Result<(), SimError> {
+        for slot in &self.slots {
+            let Some(b) = &slot.body else { continue };
+            if b.kind == BodyKind::Fixed || b.asleep {
+                continue;
+            }
+            if let Motion::Unbounded { .. } = b.motion(self.gravity) {
+                return Err(self.runtime(format!(
+                    "body {}: its motion cannot be bounded (velocity {}, angular velocity {})",
+                    b.name, b.velocity, b.omega
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// Tight box of a fixed body, swept box of a moving one over `dt` from now; grown by ε_c so
     /// pairs within ε_c are close.
     pub(super) fn swept_box(&self, i: u32, dt: f64) -> impulse_geom::Aabb {
@@ -177,11 +198,17 @@ impl World {
             .min(self.next_controller_time())
             .min(self.next_multibody_control(t0))
             .min(self.islands.next_step.max(t0));
-        // Every moving body's motion, once per step (a scratch buffer kept between steps).
+        // Every moving body's motion, once per step (a scratch buffer kept between steps). A
+        // step that ends where it starts (a pair due now, an island step now) moves nothing:
+        // the boxes in the broad phase cover this instant already, and no pair becomes close.
         let (g, eps) = (self.gravity, self.collision_epsilon());
         let mut moving = std::mem::take(&mut self.moving);
         moving.clear();
+        let instant = t_end <= t0;
         for (i, slot) in self.slots.iter().enumerate() {
+            if instant {
+                break;
+            }
             let Some(b) = &slot.body else { continue };
             // A sleeping body does not move: its box in the hash stays the one it fell asleep
             // with, as a fixed body's does.
@@ -201,6 +228,9 @@ impl World {
         let detecting = self.tick();
         let mut failed = None;
         'boxes: loop {
+            if instant {
+                break;
+            }
             for &(i, motion, grow) in &moving {
                 let b = motion.swept_com_aabb(t_end - t0).expanded(grow);
                 match self.hash_mut().update(i, b) {
@@ -217,12 +247,14 @@ impl World {
             }
             break;
         }
-        self.box_span = t_end - t0;
+        self.box_span = (t_end - t0).max(0.0);
         self.moving = moving;
         if let Some((i, e)) = failed {
             return Err(self.runtime(format!("broad phase, body {}: {e}", self.name(i))));
         }
-        self.promote_new_pairs()?;
+        if !instant {
+            self.promote_new_pairs()?;
+        }
         self.charge(Part::Detection, detecting);
         if let Some((_, k)) = self.heap.peek() {
             t_end = t_end.min(k);
@@ -263,6 +295,8 @@ impl World {
         if self.islands.next_step <= self.time && !pair_due {
             let stepping = self.tick();
             self.island_step()?;
+            let until = self.islands.next_step;
+            self.precheck_until(until)?;
             self.charge(Part::Islands, stepping);
         }
         // 4. Check the top pair if it is due.
@@ -382,6 +416,34 @@ impl World {
             b.force = load.force;
             b.torque = load.torque;
             self.mark_stale(i);
+        }
+        Ok(())
+    }
+
+    /// Checks now every heap pair due within the coming island pass, up to `until` (the next
+    /// island step), instead of one loop step each at its key: checking a pair early is
+    /// conservative (its new bound is a bound from now), and each check at its key would cost
+    /// a step of the whole loop — every moving body advanced — for a pair that mostly turns
+    /// out still apart. A pair's key becomes the later of its old and new bounds (both are
+    /// lower bounds on when it can close its gap), or now when the check finds it to hold
+    /// at once ([`World::bound`]); a pair that can still close within the pass keeps a key
+    /// inside it and is checked at its key, as before. Pairs due now are left to the top.
+    fn precheck_until(&mut self, until: f64) -> Result<(), SimError> {
+        let now = self.time;
+        if !(until > now && until.is_finite()) {
+            return Ok(());
+        }
+        for (pair, old) in self.heap.due_before(until) {
+            if old <= now || self.is_held(pair) {
+                continue;
+            }
+            let Some(fresh) = self.rebound(pair) else {
+                continue;
+            };
+            let key = fresh.max(old);
+            self.heap
+                .set_toi(pair, key)
+                .map_err(|e| self.runtime(format!("collision heap: {e}")))?;
         }
         Ok(())
     }
