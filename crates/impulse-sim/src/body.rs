@@ -137,6 +137,15 @@ pub struct Body {
     /// The loads the heap keys of an island body were computed for (`world/envelope.rs`);
     /// `None`: for its exact load.
     pub(crate) envelope: Option<crate::world::envelope::Envelope>,
+    /// The motion bounds the keys of its far pairs were computed for (`world/envelope.rs`);
+    /// `None`: none yet, or its far pairs need new keys.
+    pub(crate) far: Option<crate::world::envelope::FarEnvelope>,
+    /// The world time its pose and velocities refer to: a body moves only when something
+    /// reads or changes it (`world/sync.rs`).
+    pub(crate) synced: f64,
+    /// The world time up to which its box in the broad phase covers its motion
+    /// (`world/sync.rs`); −∞ when its motion changed since.
+    pub(crate) box_until: f64,
     /// Asleep: at rest in a sleeping island, it does not move until woken.
     pub(crate) asleep: bool,
     /// For a link: its multibody (index in the world) and link.
@@ -188,6 +197,9 @@ impl Body {
             held_force: DVec3::ZERO,
             held_torque: DVec3::ZERO,
             envelope: None,
+            far: None,
+            synced: 0.0,
+            box_until: f64::NEG_INFINITY,
             asleep: false,
             link: None,
         }

@@ -168,6 +168,7 @@ impl World {
             self.heap.remove(p);
         }
         self.pairs.retain(|&(a, b), _| a != i && b != i);
+        self.far_keyed.retain(|&(a, b)| a != i && b != i);
     }
 
     /// Refuses new bodies that overlap one another or a body of the world by more than ε_c.
@@ -198,8 +199,10 @@ impl World {
     }
 
     /// Puts a built body in a free slot.
-    pub(super) fn insert(&mut self, body: Body) -> u32 {
+    pub(super) fn insert(&mut self, mut body: Body) -> u32 {
         let name = body.name.clone();
+        body.synced = self.time;
+        body.box_until = f64::NEG_INFINITY;
         let i = if let Some(i) = self.free.pop() {
             self.slots[i as usize].body = Some(body);
             i
@@ -284,8 +287,9 @@ impl World {
         for p in self.heap.pairs_of(i).collect::<Vec<_>>() {
             self.heap.remove(p);
         }
-        self.release_all_of(i);
+        self.release_all_of(i)?;
         self.pairs.retain(|&(a, b), _| a != i && b != i);
+        self.far_keyed.retain(|&(a, b)| a != i && b != i);
         self.loads.retain(|l| l.body != i);
         self.stale.retain(|&s| s != i);
         if let Some((hash, _)) = &mut self.hash {
@@ -360,7 +364,7 @@ impl World {
         }
         let fixed = moved.kind == BodyKind::Fixed;
         *self.b_mut(i) = moved;
-        self.forget_pair_states(i);
+        self.forget_pair_states(i)?;
         if fixed {
             let b = self.static_box(i);
             self.hash_mut()
@@ -562,8 +566,10 @@ impl World {
         if !self.stale.contains(&i) {
             self.stale.push(i);
         }
-        // Its keys are computed again for its exact load (`envelope.rs`).
-        self.b_mut(i).envelope = None;
+        // Its keys are computed again for its exact load, its far pairs' too (`envelope.rs`).
+        let b = self.b_mut(i);
+        b.envelope = None;
+        b.far = None;
         // A change by the program (or a load) wakes a sleeping island and is a transient for
         // an awake one: its island steps now.
         self.wake(i);
@@ -573,13 +579,14 @@ impl World {
     }
 
     /// Forgets the cached features and normals of every pair of body `i` (it was moved).
-    fn forget_pair_states(&mut self, i: u32) {
-        self.release_all_of(i);
+    fn forget_pair_states(&mut self, i: u32) -> Result<(), SimError> {
+        self.release_all_of(i)?;
         for (pair, state) in &mut self.pairs {
             if pair.0 == i || pair.1 == i {
                 *state = super::PairState::default();
             }
         }
+        Ok(())
     }
 
     pub(super) fn hash_mut(&mut self) -> &mut CoherentHash {

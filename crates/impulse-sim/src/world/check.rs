@@ -109,6 +109,10 @@ impl World {
     /// overlapping with no normal seen before (bodies placed touching) gets its normal from
     /// [`impulse_collide::depth`].
     fn query(&mut self, (a, b): (u32, u32)) -> Scan {
+        debug_assert!(
+            self.is_synced(a) && self.is_synced(b),
+            "a pair is checked with its bodies at now"
+        );
         let time = self.time;
         let schedule = self.schedule;
         #[cfg(test)]
@@ -270,50 +274,63 @@ impl World {
     /// closed further, and bodies that fall together (a stack placed with small gaps) have
     /// no relative motion until the one below stops: they would land one after another as
     /// collisions, each making its island take a cold impulsive solve.
-    pub(super) fn bound(&mut self, pair: (u32, u32)) -> f64 {
+    pub(super) fn bound(&mut self, pair: (u32, u32)) -> Result<f64, SimError> {
+        self.sync_pair(pair)?;
         if let Some(key) = self.far_bound(pair) {
-            return key;
+            return Ok(key);
         }
         let scan = self.query(pair);
         if scan.distance < self.collision_epsilon() {
             if let Some(n) = scan.normal {
                 let mid = self.witness_point(pair, &scan.closest(), n);
                 if self.holds(pair, mid, n) {
-                    return self.time;
+                    self.far_keyed.remove(&pair);
+                    return Ok(self.time);
                 }
             }
         }
         let key = self.key_for(pair, &scan, false, &[]);
         self.note_slack(pair, scan.normal, scan.pieces, scan.motions, scan.distance);
-        key
+        self.far_keyed.remove(&pair);
+        Ok(key)
     }
 
     /// A pair's new key, as [`World::bound`] gives it but without the hold-at-once rule: a pair
     /// found within ε_c is left to its key (`None`), since checking a pair ahead of its key
     /// must not decide what its check at the key would (a pair held as soon as a pass starts
     /// instead of when its key comes is held at another speed).
-    pub(super) fn rebound(&mut self, pair: (u32, u32)) -> Option<f64> {
+    pub(super) fn rebound(&mut self, pair: (u32, u32)) -> Result<Option<f64>, SimError> {
+        self.sync_pair(pair)?;
         if let Some(key) = self.far_bound(pair) {
-            return Some(key);
+            return Ok(Some(key));
         }
         let scan = self.query(pair);
         if scan.distance < self.collision_epsilon() {
-            return None;
+            return Ok(None);
         }
         let key = self.key_for(pair, &scan, false, &[]);
         self.note_slack(pair, scan.normal, scan.pieces, scan.motions, scan.distance);
-        Some(key)
+        self.far_keyed.remove(&pair);
+        Ok(Some(key))
     }
 
-    /// The key of a far pair ([`FAR_PAIR_REL`]) from its bounding spheres alone; `None` for a
-    /// near pair or one with a link (whose motion bound the caller checks against the slack
-    /// structure). The bodies are at least |c_b − c_a| − r_a − r_b apart, and that gap can
-    /// close no faster than the centres approach along their current line (any point's
-    /// displacement from rotation about its centre stays inside its sphere): the thesis's
-    /// bound (eq. 2.1) for the spheres, with the centres' motion alone (reach 0).
-    pub(super) fn far_bound(&self, (a, b): (u32, u32)) -> Option<f64> {
+    /// The key of a far pair ([`FAR_PAIR_REL`]) from its bounding spheres and its bodies' far
+    /// envelopes (`envelope.rs`: bounds on their centres' speed and acceleration, made here
+    /// for a body that has none); `None` for a near pair or one with a link or a scripted
+    /// body (whose motion is not bounded so). The bodies are at least |c_b − c_a| − r_a − r_b
+    /// apart (rotation about a centre keeps a body inside its sphere), and that gap closes no
+    /// faster than the two centres can travel, s·τ + ½·a·τ² each: the thesis's bound (eq.
+    /// 2.1) for the spheres, direction-free, so it holds through every change of the bodies'
+    /// motion that stays inside their envelopes. Records the pair as far-keyed.
+    pub(super) fn far_bound(&mut self, (a, b): (u32, u32)) -> Option<f64> {
         let (ba, bb) = (self.b(a), self.b(b));
-        if ba.is_link() || bb.is_link() {
+        let bounded = |x: &crate::body::Body| {
+            matches!(
+                x.kind,
+                crate::body::BodyKind::Dynamic | crate::body::BodyKind::Fixed
+            )
+        };
+        if !(bounded(ba) && bounded(bb)) {
             return None;
         }
         let between = bb.pose.translation - ba.pose.translation;
@@ -323,15 +340,41 @@ impl World {
         if !(gap > FAR_PAIR_REL * reach && gap > self.collision_epsilon()) {
             return None;
         }
+        let (t, g) = (self.time, self.gravity);
+        // Each side's travel bound: nothing for a body that does not move.
+        let mut speed = 0.0;
+        let mut accel = 0.0;
+        for i in [a, b] {
+            let x = self.b(i);
+            if !x.is_dynamic() || x.asleep {
+                continue;
+            }
+            let far = match x.far {
+                Some(far) => match far.tightened(x, t, g) {
+                    // Tighter, inside: the keys made with the old one still hold.
+                    Some(tight) => {
+                        self.b_mut(i).far = Some(tight);
+                        tight
+                    }
+                    None => far,
+                },
+                None => {
+                    let far = super::envelope::FarEnvelope::about(x, t, g);
+                    self.b_mut(i).far = Some(far);
+                    far
+                }
+            };
+            speed += far.speed_at(t);
+            accel += far.accel;
+        }
         #[cfg(test)]
         let toi_scale = self.faults.toi_scale;
         #[cfg(not(test))]
         let toi_scale = 1.0;
-        let (ma, mb) = (ba.motion(self.gravity), bb.motion(self.gravity));
         let target = self.schedule.target_gap(gap);
-        let tau =
-            impulse_collide::toi::toi_lower_bound(target, between / centres, &ma, 0.0, &mb, 0.0);
-        Some(self.time + toi_scale * tau)
+        let tau = impulse_collide::root::closing_time(target, 0.5 * accel, speed);
+        self.far_keyed.insert((a, b));
+        Some(t + toi_scale * tau)
     }
 
     /// The key of a pair: the earliest time any of its piece pairs could close the gap to the
@@ -378,6 +421,12 @@ impl World {
 
     /// Checks the top pair, resolves a collision, re-keys, and applies the hysteresis rule.
     pub(super) fn check_top(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
+        self.sync_pair(pair)?;
+        // A far pair cannot touch: its next key from its spheres, without a query.
+        if let Some(key) = self.far_bound(pair) {
+            return self.settle(pair, key);
+        }
+        self.far_keyed.remove(&pair);
         let scan = self.query(pair);
         let mut hit = false;
         let mut held = false;
@@ -436,7 +485,7 @@ impl World {
                             let b = self.b(i);
                             let turning = super::hold::spin_accel(b, b) >= limit;
                             if turning && self.is_held_body(i) {
-                                self.release_all_of(i);
+                                self.release_all_of(i)?;
                             }
                         }
                         let stale = std::mem::take(&mut self.stale);
@@ -476,6 +525,12 @@ impl World {
             self.note_slack(pair, scan.normal, scan.pieces, scan.motions, scan.distance);
             key
         };
+        self.settle(pair, key)
+    }
+
+    /// After the top pair's check: its new key, or, when the broad phase no longer calls it
+    /// close, it leaves the heap (the hysteresis of thesis §2.4.3).
+    fn settle(&mut self, pair: (u32, u32), key: f64) -> Result<(), SimError> {
         let still_close = self
             .hash
             .as_ref()
@@ -485,6 +540,7 @@ impl World {
             .map_err(|e| self.runtime(format!("collision heap: {e}")))?;
         if !still_close {
             self.pairs.remove(&pair);
+            self.far_keyed.remove(&pair);
         }
         Ok(())
     }
@@ -661,15 +717,29 @@ impl World {
         bodies: &[u32],
         except: Option<(u32, u32)>,
     ) -> Result<(), SimError> {
+        // A body whose centre moves outside its far envelope needs new keys for its far
+        // pairs too; inside it, they keep theirs (`envelope.rs`).
+        let (t, g) = (self.time, self.gravity);
+        for &b in bodies {
+            self.sync(b)?;
+            self.expire_box(b);
+            let x = self.b(b);
+            let (v, a) = (x.velocity, x.acceleration(g));
+            if x.far.is_some_and(|f| !f.holds(t, v, a)) {
+                self.b_mut(b).far = None;
+            }
+        }
+        let far_ok = |w: &World, i: u32| w.b(i).far.is_some() || !w.b(i).is_dynamic();
         let mut pairs: Vec<(u32, u32)> = bodies
             .iter()
             .flat_map(|&b| self.heap.pairs_of(b))
             .filter(|p| Some(*p) != except && !self.is_held(*p))
+            .filter(|p| !(self.far_keyed.contains(p) && far_ok(self, p.0) && far_ok(self, p.1)))
             .collect();
         pairs.sort_unstable();
         pairs.dedup();
         for p in pairs {
-            let key = self.bound(p);
+            let key = self.bound(p)?;
             self.heap
                 .set_toi(p, key)
                 .map_err(|e| self.runtime(format!("collision heap: {e}")))?;
@@ -816,6 +886,7 @@ impl World {
     /// goes on.
     pub(super) fn break_stall(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
         self.stalled_checks = 0;
+        self.sync_pair(pair)?;
         let scan = self.query(pair);
         let (i, j) = pair;
         let message = match scan.normal {

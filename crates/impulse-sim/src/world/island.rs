@@ -303,8 +303,13 @@ impl World {
     }
 
     /// Releases a held pair to the event loop: both bodies' heap pairs get new bounds, and a
-    /// body left in no held pair loses its held contact load.
-    fn release(&mut self, pair: (u32, u32)) {
+    /// body left in no held pair loses its held contact load (from now: both are brought to
+    /// now first, under the load they had).
+    ///
+    /// # Errors
+    /// A body whose state stops being finite on its way to now.
+    fn release(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
+        self.sync_pair(pair)?;
         self.islands.held.remove(&pair);
         for i in [pair.0, pair.1] {
             self.release_link(i);
@@ -313,7 +318,9 @@ impl World {
                 b.held_force = DVec3::ZERO;
                 b.held_torque = DVec3::ZERO;
                 b.envelope = None;
-                b.asleep = false;
+                if b.asleep {
+                    self.wake_body(i);
+                }
                 self.islands.still_since.remove(&i);
                 self.islands.due.remove(&i);
             }
@@ -321,10 +328,14 @@ impl World {
                 self.stale.push(i);
             }
         }
+        Ok(())
     }
 
     /// Forgets every held pair of body `i` (it was moved or removed).
-    pub(super) fn release_all_of(&mut self, i: u32) {
+    ///
+    /// # Errors
+    /// As [`World::release`].
+    pub(super) fn release_all_of(&mut self, i: u32) -> Result<(), SimError> {
         let mut mine: Vec<(u32, u32)> = self
             .islands
             .held
@@ -335,8 +346,9 @@ impl World {
         mine.sort_unstable();
         self.wake(i);
         for p in mine {
-            self.release(p);
+            self.release(p)?;
         }
+        Ok(())
     }
 
     /// Wakes the island of body `i` if it sleeps (every body joined to it by held pairs),
@@ -374,7 +386,7 @@ impl World {
             woken.extend(next);
         }
         for &j in &woken {
-            self.b_mut(j).asleep = false;
+            self.wake_body(j);
             self.islands.still_since.remove(&j);
             if !self.stale.contains(&j) {
                 self.stale.push(j);
@@ -458,6 +470,10 @@ impl World {
             }
         }
         pairs.sort_unstable();
+        // Their bodies (and the scripted bodies they touch) at now (`sync.rs`).
+        for &(a, b) in &pairs {
+            self.sync_pair((a, b))?;
+        }
         let mut released = Vec::new();
         let mut spinning: Vec<u32> = Vec::new();
         // Awake held pairs and how fast another of their features can approach.
@@ -534,7 +550,7 @@ impl World {
         released.sort_unstable();
         released.dedup();
         for p in released {
-            self.release(p);
+            self.release(p)?;
         }
         // 2. Each awake island with a body due: wake the whole of a partly sleeping one, step
         // it as long as its fastest-turning pair allows (the warm start is each pair's last
@@ -551,7 +567,7 @@ impl World {
             }
             for &i in &island.bodies {
                 if self.b(i).asleep {
-                    self.b_mut(i).asleep = false;
+                    self.wake_body(i);
                 }
             }
             let h0 = turning
@@ -1005,8 +1021,19 @@ impl World {
             b.held_torque = torque;
             let (a, tau) = (b.acceleration(g), b.total_torque());
             if jolted || !b.envelope.is_some_and(|e| e.holds(a, tau)) {
-                b.envelope = Some(Envelope::about(b, g, b.envelope.as_ref()));
+                let e = Envelope::about(b, g, b.envelope.as_ref());
+                // Every load the new envelope allows must lie in the far envelope too, or the
+                // far pairs' keys would not hold while the body stays in it.
+                if b.far
+                    .is_some_and(|f| e.accel.length() + e.accel_pad > f.accel)
+                {
+                    b.far = None;
+                }
+                b.envelope = Some(e);
                 self.islands.moved.push(i);
+            } else if let Some(tight) = b.envelope.and_then(|e| e.tightened(b, g)) {
+                // A subset of the envelope its keys hold for: they hold for it too.
+                b.envelope = Some(tight);
             }
         }
         self.hold_link_loads(&sources, &systems_after_jolt, &after_jolt, &solution, h)?;

@@ -134,7 +134,7 @@ fn a_far_pairs_key_comes_before_the_bodies_close_in() {
             &mut rng,
         );
         let g = unit(&mut rng) * rng.random_range(0.0..20.0);
-        let w = world_of(
+        let mut w = world_of(
             SceneDesc::new()
                 .with_collision_epsilon(eps)
                 .with_gravity(g.to_array())
@@ -194,7 +194,7 @@ fn a_far_pairs_key_comes_before_the_bodies_close_in() {
 #[test]
 fn near_pairs_and_links_are_not_bounded_by_spheres() {
     // Two unit cubes 0.2 apart: their spheres (r = 0.87) overlap.
-    let w = world_of(
+    let mut w = world_of(
         SceneDesc::new()
             .with_body(BodyDesc::new("a", ShapeDesc::cuboid([0.5; 3])))
             .with_body(BodyDesc::new("b", ShapeDesc::cuboid([0.5; 3])).at([1.2, 0.0, 0.0])),

@@ -11,12 +11,15 @@
 //!
 //! 1. `t_end` ← the earliest key of the collision heap (capped by the caller's time limit and
 //!    the next evaluation of a load function).
-//! 2. Every moving body gets the box enclosing its swept volume over `[t, t_end]` (its motion's
-//!    swept centre-of-mass box grown by r_max + ε_c); the coherent spatial hash updates its
-//!    close counters, and every pair that became close (0→1) is checked and inserted in the
-//!    heap. A new pair may have an earlier key: `t_end` shrinks (the boxes still cover it).
-//! 3. Every body advances to `t_end`, independently (in parallel with rayon; each body's result
-//!    does not depend on the thread count, so runs are deterministic).
+//! 2. Every moving body whose box in the broad phase does not cover `[t, t_end]` gets the box
+//!    enclosing its swept volume over a horizon (its motion's swept centre-of-mass box grown
+//!    by r_max + ε_c; `sync.rs`); the coherent spatial hash updates its close counters, and
+//!    every pair that became close (0→1) is checked and inserted in the heap. A new pair may
+//!    have an earlier key: `t_end` shrinks (the boxes still cover it).
+//! 3. The clock moves to `t_end`. A body moves when something reads or changes it: a check of
+//!    one of its pairs, an island step, a load; every body is brought to the end of each
+//!    [`World::step_until`] call, in parallel with rayon (`sync.rs`: each body's result does not
+//!    depend on the thread count, so runs are deterministic).
 //! 4. If the top pair is due, it is checked (`check.rs`): closer than ε_c and approaching means
 //!    a collision, resolved by `impulse-response` (a microcollision at low approach speed,
 //!    §3.5); the pair and, after an impulse, every heap pair of the two bodies get new
@@ -54,6 +57,7 @@ mod materials;
 mod patch;
 mod profile;
 mod step;
+mod sync;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -72,6 +76,7 @@ pub use hybrid_step::{
 };
 pub use materials::Material;
 pub use profile::Profile;
+pub use sync::BOX_HORIZON;
 
 use crate::body::{Body, Integrator};
 use crate::contact::{ContactKind, ContactModel};
@@ -425,6 +430,9 @@ pub struct World {
     /// the first body).
     hash: Option<(CoherentHash, (f64, f64))>,
     pairs: FxHashMap<(u32, u32), PairState>,
+    /// The heap pairs whose key was computed from their bounding spheres and their bodies'
+    /// far envelopes ([`World::far_bound`]): they keep it while both envelopes hold.
+    far_keyed: rustc_hash::FxHashSet<(u32, u32)>,
     counters: Counters,
     stalled_checks: u64,
     /// Stalls broken since time last advanced.
@@ -443,8 +451,6 @@ pub struct World {
     stale: Vec<u32>,
     /// The checking mode's monitor ([`World::set_checking`]).
     checking: Option<PenetrationMonitor>,
-    /// Scratch: the moving bodies' motions in the current step (id, motion, box growth).
-    moving: Vec<(u32, impulse_collide::Motion, f64)>,
     /// Contact islands of the switching model.
     islands: island::Islands,
     /// The multibodies (thesis ch. 5), in the order they were added.
@@ -526,6 +532,7 @@ impl World {
             heap: CollisionHeap::new(),
             hash: None,
             pairs: FxHashMap::default(),
+            far_keyed: rustc_hash::FxHashSet::default(),
             counters: Counters {
                 min_distance: f64::INFINITY,
                 ..Counters::default()
@@ -541,7 +548,6 @@ impl World {
             controllers: Vec::new(),
             stale: Vec::new(),
             checking: None,
-            moving: Vec::new(),
             islands: island::Islands::new(settings.contact_mode, settings.sustained),
             multibodies: Vec::new(),
             box_span: 0.0,

@@ -3,11 +3,10 @@
 
 use impulse_broadphase::BroadphaseError;
 use impulse_collide::Motion;
-use rayon::prelude::*;
 
 use super::profile::Part;
 use super::{Counters, MAX_CHECKS_WITHOUT_PROGRESS, MAX_STALLS_PER_INSTANT, StepReport, World};
-use crate::body::{Body, BodyKind};
+use crate::body::BodyKind;
 use crate::error::SimError;
 
 impl World {
@@ -75,6 +74,10 @@ impl World {
             while w.time < t {
                 w.loop_step(t)?;
             }
+            // Every body at the time the program sees (`sync.rs`).
+            let moving = w.tick();
+            w.sync_all()?;
+            w.charge(Part::Rigid, moving);
             Ok(())
         };
         if let Err(e) = run(self) {
@@ -198,63 +201,16 @@ impl World {
             .min(self.next_controller_time())
             .min(self.next_multibody_control(t0))
             .min(self.islands.next_step.max(t0));
-        // Every moving body's motion, once per step (a scratch buffer kept between steps). A
-        // step that ends where it starts (a pair due now, an island step now) moves nothing:
-        // the boxes in the broad phase cover this instant already, and no pair becomes close.
-        let (g, eps) = (self.gravity, self.collision_epsilon());
-        let mut moving = std::mem::take(&mut self.moving);
-        moving.clear();
-        let instant = t_end <= t0;
-        for (i, slot) in self.slots.iter().enumerate() {
-            if instant {
-                break;
-            }
-            let Some(b) = &slot.body else { continue };
-            // A sleeping body does not move: its box in the hash stays the one it fell asleep
-            // with, as a fixed body's does.
-            if b.kind == BodyKind::Fixed || b.asleep {
-                continue;
-            }
-            let motion = b.motion(g);
-            if let Motion::Unbounded { .. } = motion {
-                return Err(self.runtime(format!(
-                    "body {}: its motion cannot be bounded (velocity {}, angular velocity {})",
-                    b.name, b.velocity, b.omega
-                )));
-            }
-            moving.push((i as u32, motion, b.r_max + eps));
-        }
-        // 2. Swept boxes; halve the step while a box would cover too many tiles.
+        // 2. Boxes in the broad phase for every body whose box does not cover the step
+        // (`sync.rs`), and the pairs that became close. A step that ends where it starts (a
+        // pair due now, an island step now) moves nothing: the boxes cover this instant.
         let detecting = self.tick();
-        let mut failed = None;
-        'boxes: loop {
-            if instant {
-                break;
-            }
-            for &(i, motion, grow) in &moving {
-                let b = motion.swept_com_aabb(t_end - t0).expanded(grow);
-                match self.hash_mut().update(i, b) {
-                    Ok(()) => {}
-                    Err(BroadphaseError::TooManyCells { .. }) if t_end - t0 > 0.0 => {
-                        t_end = t0 + 0.5 * (t_end - t0);
-                        continue 'boxes;
-                    }
-                    Err(e) => {
-                        failed = Some((i, e));
-                        break 'boxes;
-                    }
-                }
-            }
-            break;
-        }
-        self.box_span = (t_end - t0).max(0.0);
-        self.moving = moving;
-        if let Some((i, e)) = failed {
-            return Err(self.runtime(format!("broad phase, body {}: {e}", self.name(i))));
-        }
+        let instant = t_end <= t0;
         if !instant {
+            self.refresh_boxes(t0, &mut t_end)?;
             self.promote_new_pairs()?;
         }
+        self.box_span = (t_end - t0).max(0.0);
         self.charge(Part::Detection, detecting);
         if let Some((_, k)) = self.heap.peek() {
             t_end = t_end.min(k);
@@ -265,11 +221,8 @@ impl World {
         let integrating = self.tick();
         self.advance_multibodies(t0, &mut t_end)?;
         self.charge(Part::Multibody, integrating);
-        let dt = t_end - t0;
-        if dt > 0.0 {
-            let moving = self.tick();
-            self.advance_bodies(dt)?;
-            self.charge(Part::Rigid, moving);
+        // The other bodies move when something reads or changes them (`sync.rs`).
+        if t_end > t0 {
             self.stalled_checks = 0;
             self.stalls = 0;
         }
@@ -283,6 +236,7 @@ impl World {
         // High-level controllers due now (scheduled as the loads are).
         if self.next_controller_time() <= self.time {
             let controlling = self.tick();
+            self.sync_all()?;
             self.update_due_controllers()?;
             self.rekey_stale()?;
             self.charge(Part::Control, controlling);
@@ -325,51 +279,91 @@ impl World {
                 }
             }
         }
-        if let Some(mut monitor) = self.checking.take() {
-            monitor.sample(self);
-            self.checking = Some(monitor);
+        if self.checking.is_some() {
+            self.sync_all()?;
+            if let Some(mut monitor) = self.checking.take() {
+                monitor.sample(self);
+                self.checking = Some(monitor);
+            }
         }
         Ok(())
     }
 
-    fn advance_bodies(&mut self, dt: f64) -> Result<(), SimError> {
-        let (g, integ) = (self.gravity, self.integrator);
-        // Parallel only when enough bodies move (this step's moving bodies: sleeping and
-        // fixed ones have nothing to advance), on the world's pool or rayon's global one.
-        let serial = self.moving.len() < self.parallel_min_bodies;
-        let step = |b: &mut Body| b.advance(dt, g, &integ).err().map(|e| e.to_string());
-        let run = |slots: &mut [super::Slot]| -> Vec<Option<String>> {
-            if serial {
-                slots
-                    .iter_mut()
-                    .map(|s| s.body.as_mut().and_then(step))
-                    .collect()
-            } else {
-                slots
-                    .par_iter_mut()
-                    .map(|s| s.body.as_mut().and_then(step))
-                    .collect()
-            }
-        };
-        // A serial step never enters the pool: `install` alone waits on the pool's thread.
-        let errors = match &self.pool {
-            Some(pool) if !serial => {
-                #[cfg(test)]
-                {
-                    self.faults.pool_steps += 1;
+    /// Replaces the broad-phase box of every moving body whose box does not cover the step
+    /// `[t0, t_end]`: a dynamic or scripted body's over [`super::BOX_HORIZON`] or the step,
+    /// whichever is longer (it is brought to now first), a link's over the step (its
+    /// multibody's check reads the box of the step); `box_until` records how far it covers.
+    /// Halves the step while a box would cover too many tiles even over the step alone.
+    fn refresh_boxes(&mut self, t0: f64, t_end: &mut f64) -> Result<(), SimError> {
+        let (g, eps) = (self.gravity, self.collision_epsilon());
+        'boxes: loop {
+            for i in 0..self.slots.len() as u32 {
+                let Some(b) = &self.slots[i as usize].body else {
+                    continue;
+                };
+                // A sleeping body does not move: its box stays the one it fell asleep with,
+                // as a fixed body's does.
+                if b.kind == BodyKind::Fixed || b.asleep {
+                    continue;
                 }
-                pool.install(|| run(&mut self.slots))
+                let link = b.is_link();
+                if !link && b.box_until >= *t_end {
+                    continue;
+                }
+                if !link {
+                    self.sync(i)?;
+                }
+                let b = self.b(i);
+                let motion = b.motion(g);
+                if let Motion::Unbounded { .. } = motion {
+                    return Err(self.runtime(format!(
+                        "body {}: its motion cannot be bounded (velocity {}, angular velocity {})",
+                        b.name, b.velocity, b.omega
+                    )));
+                }
+                let grow = b.r_max + eps;
+                let step = *t_end - t0;
+                let long = if link {
+                    step
+                } else {
+                    step.max(super::BOX_HORIZON)
+                };
+                let mut covered = None;
+                for span in [long, step] {
+                    let bx = motion.swept_com_aabb(span).expanded(grow);
+                    match self.hash_mut().update(i, bx) {
+                        Ok(()) => {
+                            covered = Some(span);
+                            break;
+                        }
+                        Err(BroadphaseError::TooManyCells { .. }) => {}
+                        Err(e) => {
+                            return Err(
+                                self.runtime(format!("broad phase, body {}: {e}", self.name(i)))
+                            );
+                        }
+                    }
+                }
+                match covered {
+                    Some(span) => {
+                        if !link {
+                            self.b_mut(i).box_until = t0 + span;
+                        }
+                    }
+                    None if step > 0.0 => {
+                        *t_end = t0 + 0.5 * step;
+                        continue 'boxes;
+                    }
+                    None => {
+                        return Err(self.runtime(format!(
+                            "broad phase, body {}: its box covers too many tiles",
+                            self.name(i)
+                        )));
+                    }
+                }
             }
-            _ => run(&mut self.slots),
-        };
-        if let Some((i, e)) = errors
-            .into_iter()
-            .enumerate()
-            .find_map(|(i, e)| e.map(|e| (i, e)))
-        {
-            return Err(self.runtime(format!("body {}: {e}", self.name(i as u32))));
+            return Ok(());
         }
-        Ok(())
     }
 
     /// Inserts every pair that became close (thesis §2.4.3, 0→1) into the heap.
@@ -381,7 +375,7 @@ impl World {
             if !self.pair_matters(a, b) || self.heap.contains((a, b)) {
                 continue;
             }
-            let key = self.bound((a, b));
+            let key = self.bound((a, b))?;
             self.heap
                 .insert((a, b), key)
                 .map_err(|e| self.runtime(format!("collision heap: {e}")))?;
@@ -398,6 +392,7 @@ impl World {
             if due > self.time {
                 continue;
             }
+            self.sync(i)?;
             let state = self.b(i).state();
             let load = (self.loads[k].f)(self.time, &state);
             if !(load.force.is_finite() && load.torque.is_finite()) {
@@ -437,7 +432,7 @@ impl World {
             if old <= now || self.is_held(pair) {
                 continue;
             }
-            let Some(fresh) = self.rebound(pair) else {
+            let Some(fresh) = self.rebound(pair)? else {
                 continue;
             };
             let key = fresh.max(old);

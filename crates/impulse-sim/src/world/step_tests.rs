@@ -104,15 +104,15 @@ fn a_world_at_rest_steps_exactly_as_the_loop_would() {
     }
 }
 
-/// A world with few moving bodies and its own pool (`set_threads`) advances them on the
-/// calling thread: handing them to the pool at every step cost the dominos 5x their wall time
-/// on one thread. With `set_parallel_min_bodies(0)` every step goes to the pool, and the
+/// A world with few moving bodies and its own pool (`set_threads`) brings them to the end of
+/// each call on the calling thread: handing a few bodies to the pool costs more than their
+/// work. With `set_parallel_min_bodies(0)` every call hands them to the pool, and the
 /// trajectory is bit for bit the same.
 #[test]
 fn a_small_world_on_its_own_pool_stays_on_the_calling_thread() {
-    let run = |min_bodies: Option<usize>| {
+    let run = |threads: usize, min_bodies: Option<usize>| {
         let mut world = World::new(WorldSettings::new(1e-4)).expect("valid settings");
-        world.set_threads(1).expect("pool");
+        world.set_threads(threads).expect("pool");
         if let Some(n) = min_bodies {
             world.set_parallel_min_bodies(n);
         }
@@ -131,10 +131,13 @@ fn a_small_world_on_its_own_pool_stays_on_the_calling_thread() {
                 )
                 .expect("free space");
         }
-        world.step_until(0.3).expect("runs");
+        // Every body is brought to the end of each call (`sync.rs`): 300 calls.
+        for k in 1..=300 {
+            world.step_until(f64::from(k) * 1e-3).expect("runs");
+        }
         world
     };
-    let (own, pooled) = (run(None), run(Some(0)));
+    let (own, pooled) = (run(2, None), run(2, Some(0)));
     assert_eq!(
         own.faults.pool_steps, 0,
         "no step of 3 bodies enters the pool"
