@@ -143,16 +143,8 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
     }
     if args.statics {
         let (ee, _) = model.static_twists(&w);
-        let sol = solve_statics(
-            &m,
-            &loads,
-            None,
-            &StaticOptions {
-                load_steps: 4,
-                ..Default::default()
-            },
-        )
-        .map_err(|e| e.to_string())?;
+        let sol = solve_statics(&m, &loads, None, &StaticOptions::default())
+            .map_err(|e| e.to_string())?;
         let full = link_poses(&m, &sol.config);
         let r = m.bounding_radius();
         let mut s = format!(

@@ -125,7 +125,36 @@ pub enum Error {
         /// Iterations used.
         iterations: usize,
     },
+    /// The nonlinear statics could not follow the equilibrium to the full load.
+    #[error(
+        "static solve found no equilibrium: {reason}; stopped at load fraction {fraction:.6} \
+         (increment {step:.3e} refused); worst equation: {worst}; relative residual of the \
+         last attempt, per Newton iteration: [{}]",
+        scientific(.history)
+    )]
+    NoEquilibrium {
+        /// Fraction of the load path reached (0 = the start's loads, 1 = the full load).
+        fraction: f64,
+        /// The last load increment tried (fraction of the path).
+        step: f64,
+        /// Why the last increment failed.
+        reason: String,
+        /// The equation furthest from balance: a joint coordinate's force or a loop's
+        /// closure, named.
+        worst: String,
+        /// The relative residual after each Newton iteration of the last attempt.
+        history: Vec<f64>,
+    },
     /// An argument of a call is malformed (wrong length, unknown name, NaN).
     #[error("{0}")]
     Argument(String),
+}
+
+/// `[1.234e-3, …]`-style list of the numbers (three decimals of mantissa).
+fn scientific(values: &[f64]) -> String {
+    values
+        .iter()
+        .map(|x| format!("{x:.3e}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }

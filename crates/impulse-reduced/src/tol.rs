@@ -26,18 +26,39 @@ pub const AXIS_MIN_NORM: f64 = 1e-9;
 /// bounding radius), moves a pose by less than 1e-14 of it.
 pub const STATIC_RESIDUAL_REL: f64 = 1e-9;
 
-/// Most Newton iterations of the nonlinear statics before reporting
-/// [`crate::Error::NoConvergence`] (load steps are added before Newton would need more).
-pub const STATIC_MAX_ITERATIONS: usize = 60;
+/// Most Newton iterations of the nonlinear statics per load increment before the increment
+/// is halved (with the exact tangent Newton converges in 3–8 iterations from the secant
+/// predictor on the bundled and random mechanisms; more means the increment is too large).
+pub const STATIC_MAX_ITERATIONS: usize = 30;
 
-/// Relative step of the central differences that form the Newton tangent of the nonlinear
-/// statics (dimensionless, times `1 + |θ|`): truncation ~h² ≈ 1e-12, rounding ~ε/h ≈ 2e-10 of
-/// the residual scale. The tangent's accuracy only sets the convergence rate, not the solution.
-pub const STATIC_FD_STEP: f64 = 1e-6;
-
-/// Smallest backtracking fraction of a Newton step in the nonlinear statics: below it the
-/// step is taken anyway (the merit function is then flat at round-off level).
+/// Smallest backtracking fraction of a Newton step in the nonlinear statics (and the full
+/// dynamics' Newton): below it the statics give up the load increment (and halve it); the
+/// dynamics take the step anyway (their merit is then flat at round-off level).
 pub const STATIC_MIN_STEP: f64 = 1.0 / 1024.0;
+
+/// Armijo's sufficient-decrease fraction of the statics' line search (dimensionless): a
+/// step is taken when the merit falls by at least this fraction of the decrease its slope
+/// predicts (the usual 1e-4: nearly any decrease).
+pub const STATIC_ARMIJO: f64 = 1e-4;
+
+/// Smallest load increment of the statics' continuation, as a fraction of the load path
+/// (dimensionless): below it no nearby equilibrium is followed (a limit point, or none) and
+/// the solve reports [`crate::Error::NoEquilibrium`]. 2⁻²⁰ ≈ 1e-6: twenty halvings.
+pub const STATIC_MIN_LOAD_STEP: f64 = 1.0 / 1_048_576.0;
+
+/// Most load increments the statics' continuation takes before giving up (each at least
+/// [`STATIC_MIN_LOAD_STEP`] long, growing when Newton converges fast).
+pub const STATIC_MAX_LOAD_STEPS: usize = 2000;
+
+/// A load increment whose Newton iteration converged in at most this many iterations lets
+/// the next increment double (the secant predictor was good).
+pub const STATIC_FAST_ITERATIONS: usize = 4;
+
+/// Below this rotation angle (rad) the coefficients of the derivative of the SO(3) right
+/// Jacobian (the statics' exact tangent, `reference::tangent`) are evaluated by their Taylor
+/// series through t⁶ (truncation below 1e-15 relative at 0.1); above, by the closed forms,
+/// whose cancellation costs ~ε/t² relative (2e-14 at 0.1).
+pub const DJR_SERIES_ANGLE: f64 = 0.1;
 
 /// Largest ratio `σ_{r+1}/σ_r` accepted at the rank `r` the joints give (dimensionless): the
 /// reduced matrices are truncated to that rank only when their spectrum has a clear gap there.
