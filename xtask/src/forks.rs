@@ -33,6 +33,7 @@ use impulse_reduced::study::{
     NEAR_REST_DISPLACEMENT, PAPER_SINGLE_BAND, curve_at, fig7, geometric, subdivide,
     worst_blend_ratio,
 };
+use impulse_reduced::timing::StepClock;
 use impulse_reduced::{ConstructOptions, MassModel, Mechanism, ReducedModel, ReducedSim, scenes};
 
 use crate::Result;
@@ -107,7 +108,9 @@ fn err<E: std::fmt::Display>(what: &str) -> impl Fn(E) -> String + '_ {
     move |e| format!("{what}: {e}")
 }
 
-/// µs per single-model step with `threads` threads.
+/// µs per single-model step with `threads` threads: the end-effector step and every internal
+/// link's pose, [`STEPS`] steps timed after as many of warm-up, by the clock `impulse reduce`
+/// reports `us_per_step` with ([`StepClock`]: the mean of the timed steps).
 fn time_single(m: &Mechanism, model: &ReducedModel, threads: usize) -> Result<f64> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -116,18 +119,18 @@ fn time_single(m: &Mechanism, model: &ReducedModel, threads: usize) -> Result<f6
     let mut s = ReducedSim::new(m, model.clone(), 1e-3).map_err(err("sim"))?;
     s.external[0] = 1.0;
     let mut out = vec![Pose::IDENTITY; s.model.internal.len()];
-    Ok(pool.install(|| {
-        for _ in 0..STEPS {
-            s.step();
-            s.internal_poses(&mut out);
+    let mut clock = StepClock::new(STEPS);
+    pool.install(|| {
+        for _ in 0..2 * STEPS {
+            clock.step(|| {
+                s.step();
+                s.internal_poses(&mut out);
+            });
         }
-        let t = Instant::now();
-        for _ in 0..STEPS {
-            s.step();
-            s.internal_poses(&mut out);
-        }
-        t.elapsed().as_secs_f64() * 1e6 / STEPS as f64
-    }))
+    });
+    clock
+        .mean_us()
+        .ok_or_else(|| "no step was timed".to_owned())
 }
 
 /// µs per step of the full reference at step `h`, with the bench's 1 N load on the first end

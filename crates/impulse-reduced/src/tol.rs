@@ -3,7 +3,8 @@
 //! literal inside an algorithm.
 
 /// Factor on the truncated-SVD threshold of FORK⁻¹S eq. 9, `ε = max(m, n)·‖A‖₂·ε_mach`
-/// (dimensionless).
+/// (dimensionless): the default of [`crate::Tsvd`] (`impulse reduce --tsvd` replaces it by a
+/// relative threshold).
 ///
 /// Eq. 9 bounds the round-off of one SVD of `A`. The matrices reduced here are sums of up to
 /// hundreds of congruences `Ad C Adᵀ`, whose accumulated round-off in structurally zero
@@ -11,8 +12,8 @@
 /// "until the rank matches the expected value". A factor of 10² puts the threshold at ~1e-13·‖A‖
 /// for 6×6 blocks: above that round-off, and below the smallest physical singular value met in
 /// the acceptance test (random trees with compliances over six decades reach 6e-12·‖C‖, which a
-/// factor of 10⁴ wrongly truncates). The rank is always checked against an independent count
-/// ([`crate::Error::Rank`]).
+/// factor of 10⁴ wrongly truncates). The end-effector rank is decided on the joints'
+/// compliance-weighted motions at the same threshold and reported ([`crate::rank`]).
 pub const TSVD_FACTOR: f64 = 1e2;
 
 /// Smallest accepted length of a joint axis before normalisation (the axis's own units, usually
@@ -60,12 +61,19 @@ pub const STATIC_FAST_ITERATIONS: usize = 4;
 /// whose cancellation costs ~ε/t² relative (2e-14 at 0.1).
 pub const DJR_SERIES_ANGLE: f64 = 0.1;
 
-/// Largest ratio `σ_{r+1}/σ_r` accepted at the rank `r` the joints give (dimensionless): the
-/// reduced matrices are truncated to that rank only when their spectrum has a clear gap there.
-/// Round-off directions of the walk sit 11–15 decades below the physical ones in the bundled
-/// and random mechanisms; the physical spectrum of a compliance spans at most the square of
-/// the compliance range. 1e-6 separates the two with room on both sides.
+/// Largest ratio `σ_{r+1}/σ_r` at a rank cut that counts as a clear gap (dimensionless): a
+/// model whose end-effector cut (or a merge's) is less clear builds, with a
+/// [`crate::RankWarning::SmallGap`]; the accelerability and damping must have a clear gap at
+/// the compliance's rank ([`crate::Error::Rank`] otherwise). Round-off directions of the walk
+/// sit 11–15 decades below the physical ones in the bundled and random mechanisms; 1e-4
+/// separates the two with room on both sides.
 pub const RANK_GAP: f64 = 1e-4;
+
+/// Estimated relative accuracy of a model's stiffness `K = C⁺` (cond(C) times the measured
+/// round-off of C) above which the construction warns
+/// ([`crate::RankWarning::IllConditioned`]): a millionth, where the reduced model's own
+/// linearisation error at a relative displacement of 1e-3 starts to be of the same size.
+pub const STIFFNESS_ACCURACY_WARN: f64 = 1e-6;
 
 /// Projected Gauss–Seidel sweeps allowed per step (contacts of a few end effectors converge
 /// in tens of sweeps; the cap bounds the cost of a badly conditioned step).

@@ -22,5 +22,5 @@ pub(crate) mod tangent;
 
 pub use dynamics::{FullOptions, FullSim, FullStepReport};
 pub use kinematics::{Configuration, joint_motion};
-pub use linear::LinearStatics;
+pub use linear::{JointMatrix, LinearStatics};
 pub use statics::{Load, StaticOptions, StaticSolution, solve_statics};
