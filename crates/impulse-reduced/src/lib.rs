@@ -36,6 +36,7 @@
 pub mod blend;
 mod blend_cache;
 pub mod construct;
+pub mod convergence;
 mod desc;
 pub mod dynamics;
 mod error;

@@ -101,13 +101,6 @@ pub const BLEND_STATIC_ITERATIONS: usize = 4000;
 /// stops here. The bundled mechanisms settle with β between 1/2 and 1/8 at the Fig. 7 loads.
 pub const BLEND_STATIC_MIN_RELAXATION: f64 = 1.0 / 64.0;
 
-/// Gap `σ_{r+1}/σ_r` required of a blended step's system matrix `M̄ + hD̄ + h²K̄` at the
-/// closest model's rank r (dimensionless): 1, no check. The matrix is truncated to rank r
-/// whatever its spectrum beyond: where the blended models' ranks differ, `M̄` and `K̄` have
-/// ranges that differ by the blend, and the singular values this adds past r belong to
-/// directions the closest model rules out (see `BlendedModel::step`).
-pub const BLEND_SYSTEM_GAP: f64 = 1.0;
-
 /// The blended statics stop when the end effectors move less than this in a pass (scaled
 /// twist norm, dimensionless: lengths over the bounding radius, angles over π).
 pub const BLEND_STATIC_TOLERANCE: f64 = 1e-13;
