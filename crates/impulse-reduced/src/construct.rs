@@ -179,7 +179,12 @@ impl ReducedModel {
         let compliance = symmetrise(&stack(&cw.to_end_effectors, ee));
         let schur = lin.compliance_of(ee);
         let error = frobenius(&(&compliance - &schur));
-        let (stiffness, c_report, rigid) = compliance_rank(&compliance, rank, tsvd, error)?;
+        let (stiffness, c_report) = compliance_rank(&compliance, rank, tsvd, error)?;
+        // The directions the joints allow but the threshold drops, from W (accurate; C's own
+        // eigenvectors of its null space are tilted by its round-off over its small
+        // eigenvalues), as columns: held rigid in A and D.
+        let dropped = dropped_directions(&w, rank, allowed)?;
+        let rigid = Mat::from_fn(6 * ne, dropped.len(), |r, k| dropped[k].twist[r]);
         maps.push(c_report.clone());
 
         // Accelerability (eq. 7, or exact), constrained to the directions C keeps (the
@@ -252,7 +257,7 @@ impl ReducedModel {
         };
 
         let diagnostics = diagnose(
-            maps, &w_report, &c_report, &a_report, allowed, rank, &w, error, tsvd,
+            maps, &w_report, &c_report, &a_report, allowed, rank, dropped, error, tsvd,
         )?;
 
         // Twist maps (eq. 22): the coupled compliance between each internal link and the end
@@ -361,21 +366,13 @@ fn report(map: &str, p: &Pinv) -> RankReport {
     RankReport::new(map, (n, n), p.singular.clone(), p.threshold, p.rank)
 }
 
-/// The diagnostics of a construction: the maps' reports, the directions treated as rigid
-/// (W's left singular vectors past the rank, up to what the joints allow), conditioning and
-/// warnings.
-#[allow(clippy::too_many_arguments)]
-fn diagnose(
-    maps: Vec<RankReport>,
-    w_report: &RankReport,
-    c_report: &RankReport,
-    a_report: &RankReport,
-    allowed: usize,
-    rank: usize,
+/// The directions the joints allow but the threshold drops: W's left singular vectors past
+/// `rank` up to `allowed`, with their relative compliance `(σ/σ₁)²`.
+fn dropped_directions(
     w: &Mat<f64>,
-    error: f64,
-    tsvd: Tsvd,
-) -> Result<Diagnostics, Error> {
+    rank: usize,
+    allowed: usize,
+) -> Result<Vec<DroppedDirection>, Error> {
     let mut dropped = Vec::new();
     if allowed > rank {
         let svd = w
@@ -392,6 +389,23 @@ fn diagnose(
             });
         }
     }
+    Ok(dropped)
+}
+
+/// The diagnostics of a construction: the maps' reports, the directions treated as rigid,
+/// conditioning and warnings.
+#[allow(clippy::too_many_arguments)]
+fn diagnose(
+    maps: Vec<RankReport>,
+    w_report: &RankReport,
+    c_report: &RankReport,
+    a_report: &RankReport,
+    allowed: usize,
+    rank: usize,
+    dropped: Vec<DroppedDirection>,
+    error: f64,
+    tsvd: Tsvd,
+) -> Result<Diagnostics, Error> {
     let largest_c = c_report.largest();
     let compliance_error = if largest_c > 0.0 {
         error / largest_c
@@ -439,7 +453,7 @@ fn diagnose(
         });
     }
     Ok(Diagnostics {
-        relative_threshold: tsvd.relative_threshold(w.nrows(), w.nrows()),
+        relative_threshold: tsvd.relative_threshold(c_report.rows, c_report.rows),
         allowed,
         maps,
         dropped,

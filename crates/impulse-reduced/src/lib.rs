@@ -41,6 +41,7 @@ mod desc;
 pub mod dynamics;
 mod error;
 pub mod export;
+pub mod hard_cases;
 pub mod internal;
 mod lanes;
 pub mod linalg;

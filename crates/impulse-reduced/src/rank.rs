@@ -305,8 +305,7 @@ pub fn motion_rank(
     Ok((rank, allowed, report))
 }
 
-/// C truncated at `rank`: its pseudo-inverse K, the report, and the dropped eigenvectors (as
-/// columns). `error` is the measured absolute round-off of C (Frobenius norm of its
+/// C truncated at `rank`: its pseudo-inverse K and the report. `error` is the measured absolute round-off of C (Frobenius norm of its
 /// difference from the Schur complement): C's smallest kept singular value must stand above
 /// it (and above eq. 9's round-off of one SVD) for the walk to resolve the direction.
 ///
@@ -318,7 +317,7 @@ pub fn compliance_rank(
     rank: usize,
     tsvd: Tsvd,
     error: f64,
-) -> Result<(Mat<f64>, RankReport, Mat<f64>), Error> {
+) -> Result<(Mat<f64>, RankReport), Error> {
     let n = c.nrows();
     let evd = c
         .self_adjoint_eigen(faer::Side::Lower)
@@ -360,8 +359,7 @@ pub fn compliance_rank(
             }
         }
     }
-    let dropped = Mat::from_fn(n, n - rank, |a, j| u[(a, idx[rank + j])]);
-    Ok((k, report, dropped))
+    Ok((k, report))
 }
 
 /// `A` constrained to move only in the directions orthogonal to the columns of `u`: its

@@ -47,6 +47,14 @@ pub const STATIC_ARMIJO: f64 = 1e-4;
 /// the solve reports [`crate::Error::NoEquilibrium`]. 2⁻²⁰ ≈ 1e-6: twenty halvings.
 pub const STATIC_MIN_LOAD_STEP: f64 = 1.0 / 1_048_576.0;
 
+/// Largest change of a joint coordinate (rad, or lengths over 1 + the bounding radius) the
+/// statics' Newton corrector may make from the continuation's predictor before the load
+/// increment is halved: the secant predictor is exact to first order, so on the equilibrium
+/// branch the correction shrinks with the square of the increment; a larger one means Newton
+/// went to another equilibrium. 0.2 rad keeps the increments at a few per radian of
+/// deflection.
+pub const STATIC_MAX_CORRECTION: f64 = 0.2;
+
 /// Most load increments the statics' continuation takes before giving up (each at least
 /// [`STATIC_MIN_LOAD_STEP`] long, growing when Newton converges fast).
 pub const STATIC_MAX_LOAD_STEPS: usize = 2000;

@@ -26,9 +26,12 @@
 //!   solver then stalled at a floor proportional to the load on random ladders.
 //! - *Load continuation*: the loads are applied along `L(s) = L₀ + s (L − L₀)` (L₀ the loads
 //!   the start balances, none at rest), s from 0 to 1 in adaptive increments: an increment
-//!   whose Newton iteration or line search fails is halved and retried from the last
-//!   equilibrium; one that converges in few iterations doubles the next; each starts from the
-//!   secant through the last two equilibria.
+//!   whose Newton iteration or line search fails, or whose corrector moves a joint by more
+//!   than [`tol::STATIC_MAX_CORRECTION`] from the predictor (it may have left the equilibrium
+//!   branch: from rest under a large load Newton can converge straight to a far, unstable
+//!   equilibrium, as it did on two of the fifty hard cases, `crate::hard_cases`), is halved
+//!   and retried from the last equilibrium; one that converges in few iterations doubles the
+//!   next; each starts from the secant through the last two equilibria.
 //! - *Failure*: when the increment falls below [`StaticOptions::min_load_step`] (no nearby
 //!   equilibrium: a limit point, or none at all) the error ([`Error::NoEquilibrium`]) gives
 //!   the load fraction reached, the residual history of the last attempt and the joint or loop
@@ -305,6 +308,16 @@ impl Problem<'_> {
         }))
     }
 
+    /// The largest change of a joint coordinate from `a` to `b`, angles in radians and
+    /// lengths over `length`.
+    fn correction(&self, a: &State, b: &State) -> f64 {
+        a.theta
+            .iter()
+            .zip(&b.theta)
+            .zip(&self.unit)
+            .fold(0.0_f64, |m, ((x, y), u)| m.max((x - y).abs() / u))
+    }
+
     /// The equation furthest from balance in `e`, named (joint coordinate or loop).
     fn worst(&self, e: &Evaluation) -> String {
         let m = self.m;
@@ -468,7 +481,17 @@ pub fn solve_statics(
             }
             _ => x.clone(),
         };
-        match problem.newton(target, guess)? {
+        match problem.newton(target, guess.clone())? {
+            // A corrector that moved a joint far from the predictor may have left the branch
+            // for another equilibrium (Newton converges from rest straight to a far, unstable
+            // one under a large load): the increment is halved, unless it cannot be.
+            Ok((xs, it))
+                if problem.correction(&guess, &xs) > tol::STATIC_MAX_CORRECTION
+                    && ds * 0.5 >= options.min_load_step =>
+            {
+                iterations += it;
+                ds *= 0.5;
+            }
             Ok((xs, it)) => {
                 iterations += it;
                 accepted += 1;
