@@ -15,6 +15,10 @@
 //!   `impulse_reduced::study`); written as
 //!   `fig7-<name>.csv` and `fig7-<name>.svg`. The same rows give reduced-vs-full end-effector
 //!   pose error at equal loads (the full solution's displacement is a column too).
+//! - **Fig. 7 across the rank change**: the blended statics' largest errors between N evenly
+//!   spaced samples against N (1 to 16), for the "Y", the ladder-36 and a straight robot arm,
+//!   whose rest models have a lower rank than their loaded ones
+//!   (`impulse_reduced::convergence`); `fig7-convergence.csv`.
 //!
 //! Output directory: `--out DIR` (default `target/bench`).
 
@@ -25,6 +29,7 @@ use std::time::Instant;
 use glam::DVec3;
 use impulse_geom::Pose;
 use impulse_reduced::blend::{BlendedModel, scaled_norm};
+use impulse_reduced::convergence::static_convergence;
 use impulse_reduced::reference::{
     Configuration, FullOptions, FullSim, Load, StaticOptions, solve_statics,
 };
@@ -480,11 +485,66 @@ pub fn run(out: &Path) -> Result<()> {
         write(out, &format!("fig7-{name}.csv"), &csv)?;
         write(out, &format!("fig7-{name}.svg"), &plot(name, &rows)?)?;
     }
+    convergence(out)?;
     println!(
-        "\nwrote table1.csv, table2.csv, fig7-*.csv, fig7-*.svg to {}",
+        "\nwrote table1.csv, table2.csv, fig7-*.csv, fig7-*.svg, fig7-convergence.csv to {}",
         out.display()
     );
     Ok(())
+}
+
+/// Sample counts of the convergence sweeps (samples evenly up to the largest load).
+const CONVERGENCE_COUNTS: [usize; 5] = [1, 2, 4, 8, 16];
+
+/// Fig. 7 across the rank change at rest: the blended statics' largest errors at the
+/// midpoints between N evenly spaced samples, against N (`impulse_reduced::convergence`), for
+/// the "Y" and the ladder-36 (pulled as in Fig. 7) and a straight six-link robot arm; written
+/// as `fig7-convergence.csv`.
+fn convergence(out: &Path) -> Result<()> {
+    println!(
+        "\nFig. 7 across the rank change at rest: blended statics against the full statics at the \
+         midpoints between N samples (evenly up to the largest load; p = {FIG7_SHEPARD_POWER}, \
+         the two nearest models)"
+    );
+    println!(
+        "{:<12} {:>4} {:>8} {:>11} {:>11} {:>11} {:>9}",
+        "mechanism", "N", "ranks", "EE error", "EE / disp", "constraint", "at (N)"
+    );
+    let mut csv =
+        String::from("mechanism,samples,rest_rank,loaded_rank,ee_error,ee_relative,constraint,at\n");
+    let sweeps = [
+        ("y", mechanism("y")?, DVec3::X, 400.0),
+        ("ladder-36", mechanism("ladder-36")?, DVec3::Y, 60.0),
+        (
+            "robot-arm-6",
+            scenes::robot_arm(6).build().map_err(err("robot-arm-6"))?,
+            DVec3::X,
+            4.0,
+        ),
+    ];
+    for (name, m, direction, max) in sweeps {
+        let rows = static_convergence(
+            &m,
+            0,
+            direction,
+            max,
+            &CONVERGENCE_COUNTS,
+            &Fig7Options::default(),
+        )
+        .map_err(err(name))?;
+        for r in rows {
+            println!(
+                "{name:<12} {:>4} {:>3} → {:<2} {:>11.3e} {:>11.3e} {:>11.3e} {:>9.2}",
+                r.points, r.ranks.0, r.ranks.1, r.pose, r.relative_pose, r.constraint, r.worst_load
+            );
+            let _ = writeln!(
+                csv,
+                "{name},{},{},{},{:.4e},{:.4e},{:.4e},{}",
+                r.points, r.ranks.0, r.ranks.1, r.pose, r.relative_pose, r.constraint, r.worst_load
+            );
+        }
+    }
+    write(out, "fig7-convergence.csv", &csv)
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> Result<()> {

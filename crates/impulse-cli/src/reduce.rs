@@ -55,6 +55,10 @@ pub struct ReduceArgs {
     /// static wrench and internal twist maps, with their frames, units and rank decisions.
     #[arg(long, value_name = "FILE.json")]
     compliance: Option<PathBuf>,
+    /// Threads that place the internal links (default: every core). One is the fastest on
+    /// the bundled mechanisms (docs/forks.md, Table 1).
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
     /// Simulated end time (s), > 0.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     until: f64,
@@ -134,6 +138,9 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
                 "--until {}: the end time must be a positive number of seconds",
                 args.until
             ));
+        }
+        if args.threads == Some(0) {
+            return Err("--threads 0: need at least one thread".into());
         }
     }
     let text = std::fs::read_to_string(&args.mechanism)
@@ -375,6 +382,9 @@ fn simulate(
     let rank = rank_lines(m, &model);
     let maps = map_lines(&model);
     let mut sim = ReducedSim::new(m, model, args.dt).map_err(|e| e.to_string())?;
+    if let Some(n) = args.threads {
+        sim.set_threads(n).map_err(|e| format!("--threads {n}: {e}"))?;
+    }
     // Construction: the model and the factored system matrix of the step.
     let build_ms = build_ms + t0.elapsed().as_secs_f64() * 1e3;
     sim.external = w.to_vec();
@@ -470,8 +480,11 @@ fn simulate(
     let ee = sim.end_effector_pose(0).translation.to_array();
     let us = |x: Option<f64>| x.map_or_else(|| "null".to_owned(), |x| format!("{x:.3}"));
     let (mean, median) = (us(clock.mean_us()), us(clock.median_us()));
+    let threads = args
+        .threads
+        .map_or_else(|| "\"every core\"".to_owned(), |n| n.to_string());
     Ok(format!(
-        "{{\n  \"mechanism\": {},\n  \"links\": {},\n  \"build_ms\": {build_ms:.3},\n{rank}  \"steps\": {steps},\n  \"timed_steps\": {},\n  \"us_per_step\": {mean},\n  \"us_per_step_median\": {median},\n  \"wall_s\": {wall:.4},\n  \"end_effector_0\": {ee:?},\n  \"max_constraint_error\": {max_err:.3e},\n{maps}\n}}",
+        "{{\n  \"mechanism\": {},\n  \"links\": {},\n  \"build_ms\": {build_ms:.3},\n{rank}  \"threads\": {threads},\n  \"steps\": {steps},\n  \"timed_steps\": {},\n  \"us_per_step\": {mean},\n  \"us_per_step_median\": {median},\n  \"wall_s\": {wall:.4},\n  \"end_effector_0\": {ee:?},\n  \"max_constraint_error\": {max_err:.3e},\n{maps}\n}}",
         json_string(&m.name),
         m.links.len(),
         clock.timed(),
