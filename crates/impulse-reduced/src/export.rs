@@ -227,3 +227,52 @@ impl ModelExport {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::construct::ConstructOptions;
+    use crate::reference::Configuration;
+
+    /// The exported matrices are the model's, rows as rows, and each twist map applied to a
+    /// stacked wrench gives the internal link's twist the model computes for it
+    /// (`ReducedModel::static_twists`, eq. 22), on the "Y" (two end effectors, 12 columns).
+    #[test]
+    fn exported_maps_act_as_the_model_does() {
+        let m = crate::scenes::y_shape(4).build().unwrap();
+        let model = ReducedModel::build(
+            &m,
+            &Configuration::rest(&m),
+            &[],
+            &ConstructOptions::default(),
+        )
+        .unwrap();
+        let e = ModelExport::new(&m, &model);
+        let n = 6 * model.end_effectors.len();
+        let w: Vec<f64> = (0..n).map(|k| ((k * 7 + 3) % 11) as f64 - 5.0).collect();
+        let (ee, links) = model.static_twists(&w);
+        for (i, t) in ee.iter().enumerate() {
+            for (r, x) in t.to_array().iter().enumerate() {
+                let got: f64 = (0..n).map(|c| e.compliance[6 * i + r][c] * w[c]).sum();
+                assert!(
+                    (got - x).abs() <= 1e-15 * (1.0 + x.abs()),
+                    "C row {}",
+                    6 * i + r
+                );
+            }
+        }
+        assert_eq!(e.twist_maps.len(), links.len());
+        for (map, t) in e.twist_maps.iter().zip(&links) {
+            for (r, x) in t.to_array().iter().enumerate() {
+                let got: f64 = (0..n).map(|c| map.map[r][c] * w[c]).sum();
+                assert!(
+                    (got - x).abs() <= 1e-12 * (1.0 + x.abs()),
+                    "{}: row {r}",
+                    map.frame.link
+                );
+            }
+        }
+        assert_eq!(e.end_effectors[0].link, "a3");
+        assert_eq!(e.rank, model.rank);
+    }
+}

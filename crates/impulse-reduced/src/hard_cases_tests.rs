@@ -59,11 +59,19 @@ fn near_singular_chains_and_ladders_under_growing_load() {
     assert_eq!(dropped, 2);
 }
 
-/// The independent Schur complement of a lever is `c S Sᵀ`, `S = (0, L, 0, 0, 0, 1)`.
+/// The independent Schur complement of a lever is `c S Sᵀ`, `S = (0, L, 0, 0, 0, 1)`: a rod on
+/// a hinge about z through (0.2, 0.1, 0), its frame L = 0.5 m further along x.
 #[test]
 fn schur_compliance_of_a_lever_is_closed_form() {
-    let m = crate::testutil::lever(0.01, 0.5);
-    let c = schur_compliance(&m).unwrap();
+    let mut d = MechanismDesc::new("lever");
+    d.link(LinkDesc::new("base", [0.0; 3]))
+        .link(LinkDesc::new("arm", [0.7, 0.1, 0.0]).mass(1.0, [0.01; 3]))
+        .joint(
+            JointDesc::hinge("h", "base", "arm", [0.2, 0.1, 0.0], [0.0, 0.0, 1.0])
+                .compliance(&[0.01]),
+        )
+        .end_effector("arm");
+    let c = schur_compliance(&d.build().unwrap()).unwrap();
     let s = [0.0, 0.5, 0.0, 0.0, 0.0, 1.0];
     for a in 0..6 {
         for b in 0..6 {
