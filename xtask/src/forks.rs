@@ -510,8 +510,9 @@ fn convergence(out: &Path) -> Result<()> {
         "{:<12} {:>4} {:>8} {:>11} {:>11} {:>11} {:>9}",
         "mechanism", "N", "ranks", "EE error", "EE / disp", "constraint", "at (N)"
     );
-    let mut csv =
-        String::from("mechanism,samples,rest_rank,loaded_rank,ee_error,ee_relative,constraint,at\n");
+    let mut csv = String::from(
+        "mechanism,samples,rest_rank,loaded_rank,ee_error,ee_relative,constraint,at\n",
+    );
     let sweeps = [
         ("y", mechanism("y")?, DVec3::X, 400.0),
         ("ladder-36", mechanism("ladder-36")?, DVec3::Y, 60.0),

@@ -383,7 +383,8 @@ fn simulate(
     let maps = map_lines(&model);
     let mut sim = ReducedSim::new(m, model, args.dt).map_err(|e| e.to_string())?;
     if let Some(n) = args.threads {
-        sim.set_threads(n).map_err(|e| format!("--threads {n}: {e}"))?;
+        sim.set_threads(n)
+            .map_err(|e| format!("--threads {n}: {e}"))?;
     }
     // Construction: the model and the factored system matrix of the step.
     let build_ms = build_ms + t0.elapsed().as_secs_f64() * 1e3;
