@@ -5,7 +5,7 @@
 //! loaded), a straight robot arm neither stretch nor twist about itself (rank 4, then 6).
 //!
 //! A sweep takes `N` samples evenly spaced up to a largest load (`max · k/N`, k = 1 … N; the
-//! rest model is always in the set), solves the blended statics ([`blended_statics`], the
+//! rest model is always in the set), solves the blended statics ([`crate::blend::blended_statics`], the
 //! study's Shepard exponent and support) at the midpoint of every span between neighbouring
 //! samples — the span from rest to the first sample included, where the rank changes — and
 //! compares with the full nonlinear statics there. Evenly spaced samples make the spans

@@ -10,7 +10,7 @@
 //! ([`crate::reference::kinematics`]).
 //!
 //! **Solver: globalised Newton with load continuation.**
-//! - *Tangent*: exact, from second-order kinematics ([`crate::reference::tangent`]: the
+//! - *Tangent*: exact, from second-order kinematics (`reference/tangent.rs`: the
 //!   geometric stiffness of the loads and of the loop multipliers included), checked against
 //!   central differences in its tests.
 //! - *Newton step*: the KKT system `[∂f/∂θ, Gᵀ; G, 0]` scaled symmetrically by `√c` on the
