@@ -451,12 +451,13 @@ pub fn solve_statics(
     }
     while s < 1.0 {
         if accepted + 1 > options.max_load_steps {
+            let e = problem.eval(&x, s, false);
             return Err(Error::NoEquilibrium {
                 fraction: s,
                 step: ds,
-                reason: format!("{} load increments did not reach the load", accepted),
-                worst: String::new(),
-                history: Vec::new(),
+                reason: format!("{accepted} load increments did not reach the load"),
+                worst: problem.worst(&e),
+                history: vec![problem.relative(&e).1],
             });
         }
         let target = (s + ds).min(1.0);
