@@ -16,6 +16,20 @@ fn mechanism(name: &str) -> String {
 /// 1 N on the Y's tip (100 N gives ~9e-3) must be far below 1e-5.
 const SMALL_LOAD_ERROR: f64 = 1e-5;
 
+/// The near-aligned chain's dropped direction against the stretch along z (unit vectors):
+/// the anchors' 1e-7 m offset tilts it by 5e-7 rad, so its z is 1 − 1.3e-13.
+const DIRECTION_TOL: f64 = 1e-9;
+/// The lever's compliance entries (≤ 0.01, m/N …) against `c S Sᵀ`: a few ulp.
+const COMPLIANCE_TOL: f64 = 1e-15;
+/// The lever's stiffness entries (≤ 64) against `S Sᵀ/(c|S|⁴)`: its inverse by SVD, ~1e-13.
+const STIFFNESS_TOL: f64 = 1e-9;
+/// The reduced lever's position (m) against `L (cos cLF, sin cLF)`: the exponential's
+/// rounding.
+const POSITION_TOL: f64 = 1e-14;
+/// The full lever's position (m) against the bisection of `θ = cLF cos θ`: the statics stop
+/// at 1e-9 of the force scale, ~1e-11 m here.
+const FULL_POSITION_TOL: f64 = 1e-10;
+
 #[test]
 fn static_response_matches_full_model_under_a_small_load() {
     let out = impulse(&[
@@ -249,7 +263,7 @@ fn a_near_aligned_chain_builds_and_names_what_it_treats_as_rigid() {
         .map(|x| x.as_f64().unwrap())
         .collect();
     assert!(
-        twist[2].abs() > 1.0 - 1e-9,
+        twist[2].abs() > 1.0 - DIRECTION_TOL,
         "the stretch along z: {twist:?}"
     );
     // Every map is reported: the weighted motions decide, then C and A.
@@ -361,8 +375,8 @@ fn worked_example_of_the_docs() {
     for a in 0..6 {
         for b in 0..6 {
             let got = |key: &str| written[key][a][b].as_f64().unwrap();
-            assert!((got("compliance") - c * s[a] * s[b]).abs() < 1e-15);
-            assert!((got("stiffness") - s[a] * s[b] / (c * s2 * s2)).abs() < 1e-9);
+            assert!((got("compliance") - c * s[a] * s[b]).abs() < COMPLIANCE_TOL);
+            assert!((got("stiffness") - s[a] * s[b] / (c * s2 * s2)).abs() < STIFFNESS_TOL);
         }
     }
     let position = |key: &str| -> Vec<f64> {
@@ -376,7 +390,8 @@ fn worked_example_of_the_docs() {
     let turn = c * l * f;
     let reduced = position("reduced");
     assert!(
-        (reduced[0] - l * turn.cos()).abs() < 1e-14 && (reduced[1] - l * turn.sin()).abs() < 1e-14
+        (reduced[0] - l * turn.cos()).abs() < POSITION_TOL
+            && (reduced[1] - l * turn.sin()).abs() < POSITION_TOL
     );
     // θ = c L F cos θ by bisection.
     let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
@@ -389,7 +404,10 @@ fn worked_example_of_the_docs() {
         }
     }
     let full = position("full");
-    assert!((full[0] - l * lo.cos()).abs() < 1e-10 && (full[1] - l * lo.sin()).abs() < 1e-10);
+    assert!(
+        (full[0] - l * lo.cos()).abs() < FULL_POSITION_TOL
+            && (full[1] - l * lo.sin()).abs() < FULL_POSITION_TOL
+    );
     // The document's block: every number in it as printed (the first part) or written (the
     // `lever.json` part).
     let doc =

@@ -234,6 +234,14 @@ mod tests {
     use crate::construct::ConstructOptions;
     use crate::reference::Configuration;
 
+    /// The exported compliance times a wrench against the model's: the same products, summed
+    /// in another order (relative to 1 + the value).
+    const SAME_SUMS: f64 = 1e-15;
+
+    /// The exported twist maps times a wrench against the model's eq. 22 kernel, which sums
+    /// per end effector in another order over twelve columns of mixed sizes.
+    const SUMMED_MAPS: f64 = 1e-12;
+
     /// The exported matrices are the model's, rows as rows, and each twist map applied to a
     /// stacked wrench gives the internal link's twist the model computes for it
     /// (`ReducedModel::static_twists`, eq. 22), on the "Y" (two end effectors, 12 columns).
@@ -255,7 +263,7 @@ mod tests {
             for (r, x) in t.to_array().iter().enumerate() {
                 let got: f64 = (0..n).map(|c| e.compliance[6 * i + r][c] * w[c]).sum();
                 assert!(
-                    (got - x).abs() <= 1e-15 * (1.0 + x.abs()),
+                    (got - x).abs() <= SAME_SUMS * (1.0 + x.abs()),
                     "C row {}",
                     6 * i + r
                 );
@@ -266,7 +274,7 @@ mod tests {
             for (r, x) in t.to_array().iter().enumerate() {
                 let got: f64 = (0..n).map(|c| map.map[r][c] * w[c]).sum();
                 assert!(
-                    (got - x).abs() <= 1e-12 * (1.0 + x.abs()),
+                    (got - x).abs() <= SUMMED_MAPS * (1.0 + x.abs()),
                     "{}: row {r}",
                     map.frame.link
                 );
