@@ -15,6 +15,10 @@
 //!   `impulse_reduced::study`); written as
 //!   `fig7-<name>.csv` and `fig7-<name>.svg`. The same rows give reduced-vs-full end-effector
 //!   pose error at equal loads (the full solution's displacement is a column too).
+//! - **Fig. 7 across the rank change**: the blended statics' largest errors between N evenly
+//!   spaced samples against N (1 to 16), for the "Y", the ladder-36 and a straight robot arm,
+//!   whose rest models have a lower rank than their loaded ones
+//!   (`impulse_reduced::convergence`); `fig7-convergence.csv`.
 //!
 //! Output directory: `--out DIR` (default `target/bench`).
 
@@ -25,6 +29,7 @@ use std::time::Instant;
 use glam::DVec3;
 use impulse_geom::Pose;
 use impulse_reduced::blend::{BlendedModel, scaled_norm};
+use impulse_reduced::convergence::static_convergence;
 use impulse_reduced::reference::{
     Configuration, FullOptions, FullSim, Load, StaticOptions, solve_statics,
 };
@@ -33,6 +38,7 @@ use impulse_reduced::study::{
     NEAR_REST_DISPLACEMENT, PAPER_SINGLE_BAND, curve_at, fig7, geometric, subdivide,
     worst_blend_ratio,
 };
+use impulse_reduced::timing::StepClock;
 use impulse_reduced::{ConstructOptions, MassModel, Mechanism, ReducedModel, ReducedSim, scenes};
 
 use crate::Result;
@@ -53,10 +59,10 @@ const FIG7_PARTS: usize = 4;
 /// [`NEAR_REST_DISPLACEMENT`].
 const FIG7_NEAR_REST_PARTS: usize = 8;
 
-/// Newton tolerance of the ladder's full solves: with 19 loops the finite-difference tangent
-/// and the truncated KKT solve stall between 1e-9 and 1e-8 of the force scale at the larger
-/// loads (beyond 150 N sideways they stall higher and the ladder study stops at 120 N).
-const LADDER_STATIC_TOLERANCE: f64 = 1e-7;
+/// Newton tolerance of the ladder's full solves: the default since the statics have their
+/// exact tangent (with the finite-difference tangent they stalled between 1e-9 and 1e-8 of
+/// the force scale at the larger loads, and this was 1e-7).
+const LADDER_STATIC_TOLERANCE: f64 = impulse_reduced::tol::STATIC_RESIDUAL_REL;
 
 /// Steps timed per measurement (after as many warm-up steps).
 const STEPS: usize = 2000;
@@ -107,7 +113,9 @@ fn err<E: std::fmt::Display>(what: &str) -> impl Fn(E) -> String + '_ {
     move |e| format!("{what}: {e}")
 }
 
-/// µs per single-model step with `threads` threads.
+/// µs per single-model step with `threads` threads: the end-effector step and every internal
+/// link's pose, [`STEPS`] steps timed after as many of warm-up, by the clock `impulse reduce`
+/// reports `us_per_step` with ([`StepClock`]: the mean of the timed steps).
 fn time_single(m: &Mechanism, model: &ReducedModel, threads: usize) -> Result<f64> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -116,18 +124,18 @@ fn time_single(m: &Mechanism, model: &ReducedModel, threads: usize) -> Result<f6
     let mut s = ReducedSim::new(m, model.clone(), 1e-3).map_err(err("sim"))?;
     s.external[0] = 1.0;
     let mut out = vec![Pose::IDENTITY; s.model.internal.len()];
-    Ok(pool.install(|| {
-        for _ in 0..STEPS {
-            s.step();
-            s.internal_poses(&mut out);
+    let mut clock = StepClock::new(STEPS);
+    pool.install(|| {
+        for _ in 0..2 * STEPS {
+            clock.step(|| {
+                s.step();
+                s.internal_poses(&mut out);
+            });
         }
-        let t = Instant::now();
-        for _ in 0..STEPS {
-            s.step();
-            s.internal_poses(&mut out);
-        }
-        t.elapsed().as_secs_f64() * 1e6 / STEPS as f64
-    }))
+    });
+    clock
+        .mean_us()
+        .ok_or_else(|| "no step was timed".to_owned())
 }
 
 /// µs per step of the full reference at step `h`, with the bench's 1 N load on the first end
@@ -477,11 +485,67 @@ pub fn run(out: &Path) -> Result<()> {
         write(out, &format!("fig7-{name}.csv"), &csv)?;
         write(out, &format!("fig7-{name}.svg"), &plot(name, &rows)?)?;
     }
+    convergence(out)?;
     println!(
-        "\nwrote table1.csv, table2.csv, fig7-*.csv, fig7-*.svg to {}",
+        "\nwrote table1.csv, table2.csv, fig7-*.csv, fig7-*.svg, fig7-convergence.csv to {}",
         out.display()
     );
     Ok(())
+}
+
+/// Sample counts of the convergence sweeps (samples evenly up to the largest load).
+const CONVERGENCE_COUNTS: [usize; 5] = [1, 2, 4, 8, 16];
+
+/// Fig. 7 across the rank change at rest: the blended statics' largest errors at the
+/// midpoints between N evenly spaced samples, against N (`impulse_reduced::convergence`), for
+/// the "Y" and the ladder-36 (pulled as in Fig. 7) and a straight six-link robot arm; written
+/// as `fig7-convergence.csv`.
+fn convergence(out: &Path) -> Result<()> {
+    println!(
+        "\nFig. 7 across the rank change at rest: blended statics against the full statics at the \
+         midpoints between N samples (evenly up to the largest load; p = {FIG7_SHEPARD_POWER}, \
+         the two nearest models)"
+    );
+    println!(
+        "{:<12} {:>4} {:>8} {:>11} {:>11} {:>11} {:>9}",
+        "mechanism", "N", "ranks", "EE error", "EE / disp", "constraint", "at (N)"
+    );
+    let mut csv = String::from(
+        "mechanism,samples,rest_rank,loaded_rank,ee_error,ee_relative,constraint,at\n",
+    );
+    let sweeps = [
+        ("y", mechanism("y")?, DVec3::X, 400.0),
+        ("ladder-36", mechanism("ladder-36")?, DVec3::Y, 60.0),
+        (
+            "robot-arm-6",
+            scenes::robot_arm(6).build().map_err(err("robot-arm-6"))?,
+            DVec3::X,
+            4.0,
+        ),
+    ];
+    for (name, m, direction, max) in sweeps {
+        let rows = static_convergence(
+            &m,
+            0,
+            direction,
+            max,
+            &CONVERGENCE_COUNTS,
+            &Fig7Options::default(),
+        )
+        .map_err(err(name))?;
+        for r in rows {
+            println!(
+                "{name:<12} {:>4} {:>3} → {:<2} {:>11.3e} {:>11.3e} {:>11.3e} {:>9.2}",
+                r.points, r.ranks.0, r.ranks.1, r.pose, r.relative_pose, r.constraint, r.worst_load
+            );
+            let _ = writeln!(
+                csv,
+                "{name},{},{},{},{:.4e},{:.4e},{:.4e},{}",
+                r.points, r.ranks.0, r.ranks.1, r.pose, r.relative_pose, r.constraint, r.worst_load
+            );
+        }
+    }
+    write(out, "fig7-convergence.csv", &csv)
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> Result<()> {

@@ -1,6 +1,9 @@
 //! `impulse reduce`: a FORK⁻¹S reduced model of a `Mechanism(...)` file, under a constant load:
 //! the static response against the full nonlinear statics (`--static`), or a simulation that
-//! writes end-effector and link trajectories with the columns of `impulse run`.
+//! writes end-effector and link trajectories with the columns of `impulse run`. Both print the
+//! model's rank decisions and conditioning (`impulse_reduced::rank`; warnings also on stderr);
+//! `--compliance` writes the model's matrices with their frames and units
+//! (`impulse_reduced::export`). The conventions are stated in docs/forks.md, "Conventions".
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -10,8 +13,10 @@ use impulse_geom::{DQuat, DVec3, Pose, Twist};
 use impulse_massprops::MassProperties;
 use impulse_reduced::reference::kinematics::link_poses;
 use impulse_reduced::reference::{Configuration, Load, StaticOptions, solve_statics};
+use impulse_reduced::timing::StepClock;
 use impulse_reduced::{
-    ConstructOptions, Mechanism, MechanismDesc, Obstacle, ReducedModel, ReducedSim,
+    ConstructOptions, Mechanism, MechanismDesc, ModelExport, Obstacle, ReducedModel, ReducedSim,
+    Tsvd,
 };
 
 use crate::html::{Kind, Replay, ReplayBody, ReplayFrame};
@@ -24,8 +29,10 @@ use crate::progress::Progress;
 pub struct ReduceArgs {
     /// The mechanism file (RON, `Mechanism(...)`); see fixtures/mechanisms/.
     mechanism: PathBuf,
-    /// A constant world force (and torque) on an end effector: `LINK:fx,fy,fz[,tx,ty,tz]`
-    /// (N, N·m). Repeatable.
+    /// A constant force (and torque) on an end effector: `LINK:fx,fy,fz[,tx,ty,tz]` (N, N·m),
+    /// given in world axes at the link's origin at rest. The reduced model holds it in the end
+    /// effector's body frame at rest (it turns with the end effector); the full model of
+    /// `--static` holds it fixed in the world. Repeatable.
     #[arg(
         long,
         allow_hyphen_values = true,
@@ -33,14 +40,32 @@ pub struct ReduceArgs {
     )]
     load: Vec<String>,
     /// Print the static response of the reduced model and of the full nonlinear statics
-    /// instead of simulating.
+    /// (globalised Newton with load continuation) instead of simulating. The base is held at
+    /// rest in both, a free base too.
     #[arg(long = "static")]
     statics: bool,
-    /// Simulated end time (s).
-    #[arg(long, default_value_t = 1.0)]
+    /// Relative truncated-SVD threshold τ, 0 < τ < 1: singular values at or below τ times the
+    /// largest are dropped (FORK⁻¹S eq. 9). Default: eq. 9, 100·max(m,n)·ε (~1.3e-13 for one
+    /// end effector). Raise it to treat nearly rigid end-effector directions as rigid; the
+    /// output reports every map's singular values around the cut, the gap, the rank and
+    /// cond(C). See docs/forks.md, "Rank and conditioning".
+    #[arg(long, allow_negative_numbers = true, value_name = "TAU")]
+    tsvd: Option<f64>,
+    /// Write the model as JSON: the compliance C, stiffness, accelerability, mass, damping,
+    /// static wrench and internal twist maps, with their frames, units and rank decisions.
+    #[arg(long, value_name = "FILE.json")]
+    compliance: Option<PathBuf>,
+    /// Threads that place the internal links (default: every core). One is the fastest on
+    /// the bundled mechanisms (docs/forks.md, Table 1).
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Simulated end time (s), > 0.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     until: f64,
-    /// Time step (s).
-    #[arg(long, default_value_t = 1e-3)]
+    /// Time step (s), > 0: backward Euler, stable for any step, accurate well below the
+    /// model's fastest period. There is no automatic step: 0, negative or non-finite values
+    /// are refused.
+    #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true)]
     dt: f64,
     /// A ground plane z = Z under the mechanism (friction 0.5).
     #[arg(long, allow_hyphen_values = true)]
@@ -93,8 +118,31 @@ fn parse_loads(m: &Mechanism, specs: &[String]) -> Result<Vec<Load>, String> {
         .collect()
 }
 
-/// Runs the command; returns the text to print.
+/// Runs the command; returns the text to print (warnings go to stderr).
 pub fn run(args: &ReduceArgs) -> Result<String, String> {
+    // Numbers first: a bad value is refused before anything is read or built.
+    let tsvd = match args.tsvd {
+        Some(t) => Tsvd::with_relative(t).map_err(|e| format!("--tsvd {t}: {e}"))?,
+        None => Tsvd::default(),
+    };
+    if !args.statics {
+        if !(args.dt.is_finite() && args.dt > 0.0) {
+            return Err(format!(
+                "--dt {}: the time step must be a positive number of seconds (backward Euler \
+                 is stable for any step; there is no automatic step)",
+                args.dt
+            ));
+        }
+        if !(args.until.is_finite() && args.until > 0.0) {
+            return Err(format!(
+                "--until {}: the end time must be a positive number of seconds",
+                args.until
+            ));
+        }
+        if args.threads == Some(0) {
+            return Err("--threads 0: need at least one thread".into());
+        }
+    }
     let text = std::fs::read_to_string(&args.mechanism)
         .map_err(|e| format!("{}: {e}", args.mechanism.display()))?;
     let desc =
@@ -114,15 +162,27 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
     if let Some(path) = &args.out {
         crate::run::directory_exists("--out", path)?;
     }
+    if let Some(path) = &args.compliance {
+        crate::run::directory_exists("--compliance", path)?;
+    }
     let t0 = Instant::now();
-    let model = ReducedModel::build(
-        &m,
-        &Configuration::rest(&m),
-        &[],
-        &ConstructOptions::default(),
-    )
-    .map_err(|e| e.to_string())?;
+    let options = ConstructOptions {
+        tsvd,
+        ..ConstructOptions::default()
+    };
+    let model = ReducedModel::build(&m, &Configuration::rest(&m), &[], &options)
+        .map_err(|e| format!("{}: {e}", args.mechanism.display()))?;
     let build_ms = t0.elapsed().as_secs_f64() * 1e3;
+    for w in &model.diagnostics.warnings {
+        eprintln!("warning: {w}");
+    }
+    if let Some(path) = &args.compliance {
+        let pretty = serde_json::to_string_pretty(&ModelExport::new(&m, &model))
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut json = compact_rows(&pretty);
+        json.push('\n');
+        std::fs::write(path, json).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
     let ne = model.end_effectors.len();
     let mut w = vec![0.0; 6 * ne];
     for l in &loads {
@@ -143,21 +203,19 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
     }
     if args.statics {
         let (ee, _) = model.static_twists(&w);
-        let sol = solve_statics(
-            &m,
-            &loads,
-            None,
-            &StaticOptions {
-                load_steps: 4,
-                ..Default::default()
-            },
-        )
-        .map_err(|e| e.to_string())?;
+        let sol = solve_statics(&m, &loads, None, &StaticOptions::default())
+            .map_err(|e| e.to_string())?;
         let full = link_poses(&m, &sol.config);
         let r = m.bounding_radius();
         let mut s = format!(
-            "{{\n  \"mechanism\": {},\n  \"build_ms\": {build_ms:.3},\n  \"end_effectors\": [\n",
-            json_string(&m.name)
+            "{{\n  \"mechanism\": {},\n  \"build_ms\": {build_ms:.3},\n{}  \"full_statics\": \
+             {{\"load_steps\": {}, \"newton_iterations\": {}, \"relative_residual\": {:.2e}}},\n  \
+             \"end_effectors\": [\n",
+            json_string(&m.name),
+            rank_lines(&m, &model),
+            sol.load_steps,
+            sol.iterations,
+            sol.residual
         );
         for (i, &e) in model.end_effectors.iter().enumerate() {
             let red = model.reference[i] * Pose::exp(&ee[i]);
@@ -173,10 +231,144 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
                 if i + 1 < ne { "," } else { "" }
             );
         }
-        s.push_str("  ]\n}");
+        let _ = write!(s, "  ],\n{}\n}}", map_lines(&model));
         return Ok(s);
     }
     simulate(args, &m, model, &w, build_ms)
+}
+
+/// Pretty JSON (serde_json's, fields in declaration order) with every array of scalars —
+/// a matrix row, a position — collapsed onto one line, so that a matrix reads as its rows.
+fn compact_rows(pretty: &str) -> String {
+    let lines: Vec<&str> = pretty.lines().collect();
+    let mut out: Vec<String> = Vec::with_capacity(lines.len());
+    let mut i = 0;
+    while i < lines.len() {
+        let line = lines[i];
+        if line.ends_with('[') {
+            // The array's items, up to its closing line, if all are scalars on their own lines.
+            let items: Vec<&str> = lines[i + 1..]
+                .iter()
+                .take_while(|l| !l.trim_start().starts_with(']'))
+                .copied()
+                .collect();
+            let scalar = |l: &&str| !l.contains(['[', '{', ']', '}']);
+            let close = lines.get(i + 1 + items.len());
+            if let Some(close) = close.filter(|_| items.iter().all(scalar)) {
+                let joined: Vec<&str> = items.iter().map(|l| l.trim()).collect();
+                out.push(format!(
+                    "{}{}{}",
+                    line,
+                    joined.join(" "),
+                    close.trim_start()
+                ));
+                i += items.len() + 2;
+                continue;
+            }
+        }
+        out.push(line.to_owned());
+        i += 1;
+    }
+    out.join("\n")
+}
+
+/// `x` as a JSON number with four significant digits (`1.330e-13`; JSON has no NaN or
+/// infinity: those are written as `null`).
+fn num(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.3e}")
+    } else {
+        "null".to_owned()
+    }
+}
+
+/// A JSON array of [`num`]s.
+fn nums(v: &[f64]) -> String {
+    format!(
+        "[{}]",
+        v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(", ")
+    )
+}
+
+/// The model's rank decision and conditioning as JSON lines (each ending with `,\n`):
+/// `rank` (relative threshold, directions the joints allow and the rank kept, the ones treated
+/// as rigid with their twist per end effector), `conditioning` (cond(C), the measured
+/// round-off of C, the estimated accuracy of K, cond(A)) and `warnings`.
+fn rank_lines(m: &Mechanism, model: &ReducedModel) -> String {
+    let d = &model.diagnostics;
+    let rigid: Vec<String> = d
+        .dropped
+        .iter()
+        .map(|x| {
+            let per: Vec<String> = model
+                .end_effectors
+                .iter()
+                .enumerate()
+                .map(|(i, &e)| {
+                    format!(
+                        "{}: {}",
+                        json_string(&m.links[e].name),
+                        nums(&x.twist[6 * i..6 * i + 6])
+                    )
+                })
+                .collect();
+            format!(
+                "{{\"compliance_relative\": {}, \"twist\": {{{}}}}}",
+                num(x.compliance),
+                per.join(", ")
+            )
+        })
+        .collect();
+    let c = &d.conditioning;
+    let warnings: Vec<String> = d
+        .warnings
+        .iter()
+        .map(|w| json_string(&w.to_string()))
+        .collect();
+    format!(
+        "  \"rank\": {{\"tsvd\": {}, \"allowed\": {}, \"rank\": {}, \"treated_as_rigid\": [{}]}},\n  \
+         \"conditioning\": {{\"cond_C\": {}, \"C_round_off\": {}, \"K_accuracy\": {}, \"cond_A\": {}}},\n  \
+         \"warnings\": [{}],\n",
+        num(d.relative_threshold),
+        d.allowed,
+        model.rank,
+        rigid.join(", "),
+        num(c.compliance_condition),
+        num(c.compliance_error),
+        num(c.stiffness_error),
+        num(c.accelerability_condition),
+        warnings.join(", ")
+    )
+}
+
+/// Number of singular values shown on each side of a map's cut in the printed `maps`.
+const AROUND_CUT: usize = 2;
+
+/// Every truncated SVD of the construction as a `"maps"` JSON field, one map per line: size,
+/// rank, the singular values around the cut (relative to the largest), threshold, gap, cond.
+fn map_lines(model: &ReducedModel) -> String {
+    let lines: Vec<String> = model
+        .diagnostics
+        .maps
+        .iter()
+        .map(|r| {
+            let (kept, dropped) = r.around_cut(AROUND_CUT);
+            format!(
+                "{{\"map\": {}, \"size\": [{}, {}], \"rank\": {}, \"kept\": {}, \"dropped\": {}, \
+                 \"threshold\": {}, \"gap\": {}, \"cond\": {}}}",
+                json_string(&r.map),
+                r.rows,
+                r.cols,
+                r.rank,
+                nums(&kept),
+                nums(&dropped),
+                num(r.relative_threshold()),
+                num(r.gap()),
+                num(r.condition())
+            )
+        })
+        .collect();
+    format!("  \"maps\": [\n    {}\n  ]", lines.join(",\n    "))
 }
 
 fn simulate(
@@ -186,16 +378,22 @@ fn simulate(
     w: &[f64],
     build_ms: f64,
 ) -> Result<String, String> {
+    let t0 = Instant::now();
+    let rank = rank_lines(m, &model);
+    let maps = map_lines(&model);
     let mut sim = ReducedSim::new(m, model, args.dt).map_err(|e| e.to_string())?;
+    if let Some(n) = args.threads {
+        sim.set_threads(n)
+            .map_err(|e| format!("--threads {n}: {e}"))?;
+    }
+    // Construction: the model and the factored system matrix of the step.
+    let build_ms = build_ms + t0.elapsed().as_secs_f64() * 1e3;
     sim.external = w.to_vec();
     if let Some(z) = args.ground {
         sim.obstacles.push(Obstacle::Plane {
             normal: DVec3::Z,
             offset: z,
         });
-    }
-    if !(args.until.is_finite() && args.until > 0.0) {
-        return Err(format!("--until {} is not positive", args.until));
     }
     let steps = (args.until / args.dt).ceil() as usize;
     let every = (steps / 100).max(1);
@@ -213,11 +411,16 @@ fn simulate(
     let mut base_poses: Vec<Pose> = Vec::new();
     let mut errors: Vec<(f64, f64)> = Vec::new();
     let progress = Progress::time("impulse reduce", args.until);
+    // µs per step: the step and every internal link's pose (a step as Table 1 counts it),
+    // after a warm-up; the recording below is outside it.
+    let mut clock = StepClock::for_run(steps);
     let wall = Instant::now();
     for k in 1..=steps {
-        sim.step();
-        if k % every == 0 || k == steps || k == every - 1 {
+        clock.step(|| {
+            sim.step();
             sim.internal_poses(&mut internal);
+        });
+        if k % every == 0 || k == steps || k == every - 1 {
             let poses: Vec<Pose> = (0..sim.model.end_effectors.len())
                 .map(|i| sim.end_effector_pose(i))
                 .chain(internal.iter().copied())
@@ -276,11 +479,16 @@ fn simulate(
     }
     let max_err = errors.iter().map(|e| e.1).fold(0.0, f64::max);
     let ee = sim.end_effector_pose(0).translation.to_array();
+    let us = |x: Option<f64>| x.map_or_else(|| "null".to_owned(), |x| format!("{x:.3}"));
+    let (mean, median) = (us(clock.mean_us()), us(clock.median_us()));
+    let threads = args
+        .threads
+        .map_or_else(|| "\"every core\"".to_owned(), |n| n.to_string());
     Ok(format!(
-        "{{\n  \"mechanism\": {},\n  \"links\": {},\n  \"build_ms\": {build_ms:.3},\n  \"steps\": {steps},\n  \"wall_s\": {wall:.4},\n  \"us_per_step\": {:.3},\n  \"end_effector_0\": {ee:?},\n  \"max_constraint_error\": {max_err:.3e}\n}}",
+        "{{\n  \"mechanism\": {},\n  \"links\": {},\n  \"build_ms\": {build_ms:.3},\n{rank}  \"threads\": {threads},\n  \"steps\": {steps},\n  \"timed_steps\": {},\n  \"us_per_step\": {mean},\n  \"us_per_step_median\": {median},\n  \"wall_s\": {wall:.4},\n  \"end_effector_0\": {ee:?},\n  \"max_constraint_error\": {max_err:.3e},\n{maps}\n}}",
         json_string(&m.name),
         m.links.len(),
-        wall * 1e6 / steps as f64
+        clock.timed(),
     ))
 }
 

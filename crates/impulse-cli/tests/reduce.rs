@@ -16,6 +16,20 @@ fn mechanism(name: &str) -> String {
 /// 1 N on the Y's tip (100 N gives ~9e-3) must be far below 1e-5.
 const SMALL_LOAD_ERROR: f64 = 1e-5;
 
+/// The near-aligned chain's dropped direction against the stretch along z (unit vectors):
+/// the anchors' 1e-7 m offset tilts it by 5e-7 rad, so its z is 1 − 1.3e-13.
+const DIRECTION_TOL: f64 = 1e-9;
+/// The lever's compliance entries (≤ 0.01, m/N …) against `c S Sᵀ`: a few ulp.
+const COMPLIANCE_TOL: f64 = 1e-15;
+/// The lever's stiffness entries (≤ 64) against `S Sᵀ/(c|S|⁴)`: its inverse by SVD, ~1e-13.
+const STIFFNESS_TOL: f64 = 1e-9;
+/// The reduced lever's position (m) against `L (cos cLF, sin cLF)`: the exponential's
+/// rounding.
+const POSITION_TOL: f64 = 1e-14;
+/// The full lever's position (m) against the bisection of `θ = cLF cos θ`: the statics stop
+/// at 1e-9 of the force scale, ~1e-11 m here.
+const FULL_POSITION_TOL: f64 = 1e-10;
+
 #[test]
 fn static_response_matches_full_model_under_a_small_load() {
     let out = impulse(&[
@@ -213,5 +227,230 @@ fn a_missing_output_directory_is_refused_before_the_run() {
             "{flag}: {}",
             out.stderr
         );
+    }
+}
+
+/// The near-aligned chain (three balls, the third anchor 1e-7 m off the line of the others)
+/// builds: the joints allow six end-effector directions, and the stretch along the chain (z of
+/// the tip: the one motion three collinear balls cannot make) is treated as rigid, reported
+/// with its compliance (below the threshold) and warned about on stderr.
+#[test]
+fn a_near_aligned_chain_builds_and_names_what_it_treats_as_rigid() {
+    let out = impulse(&[
+        "reduce",
+        &mechanism("near-aligned.ron"),
+        "--load",
+        "l3:1,0,0",
+        "--static",
+    ]);
+    assert!(out.ok, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("warning: near-singular"),
+        "{}",
+        out.stderr
+    );
+    let json = out.json.expect("JSON output");
+    let rank = &json["rank"];
+    assert_eq!(rank["allowed"], 6);
+    assert_eq!(rank["rank"], 5);
+    let rigid = &rank["treated_as_rigid"][0];
+    let tau = rank["tsvd"].as_f64().unwrap();
+    assert!(rigid["compliance_relative"].as_f64().unwrap() < tau);
+    let twist: Vec<f64> = rigid["twist"]["l3"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert!(
+        twist[2].abs() > 1.0 - DIRECTION_TOL,
+        "the stretch along z: {twist:?}"
+    );
+    // Every map is reported: the weighted motions decide, then C and A.
+    let maps: Vec<&str> = json["maps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["map"].as_str().unwrap())
+        .collect();
+    assert!(
+        maps.iter()
+            .any(|m| m.starts_with("end-effector compliance C")),
+        "{maps:?}"
+    );
+    assert!(json["conditioning"]["cond_C"].as_f64().unwrap() >= 1.0);
+    // A threshold below what the walk resolves is refused, naming what to do.
+    let refused = impulse(&[
+        "reduce",
+        &mechanism("near-aligned.ron"),
+        "--static",
+        "--tsvd",
+        "1e-17",
+    ]);
+    assert!(
+        !refused.ok
+            && refused.stderr.contains("cannot resolve")
+            && refused.stderr.contains("--tsvd"),
+        "{}",
+        refused.stderr
+    );
+}
+
+/// Bad numbers are refused before anything is built, naming the flag.
+#[test]
+fn bad_numbers_are_refused_naming_the_flag() {
+    let y = mechanism("y.ron");
+    for (flag, value) in [
+        ("--tsvd", "-1"),
+        ("--tsvd", "nan"),
+        ("--tsvd", "0"),
+        ("--tsvd", "1"),
+        ("--dt", "-1"),
+        ("--dt", "0"),
+        ("--until", "-1"),
+        ("--threads", "0"),
+    ] {
+        let out = impulse(&["reduce", &y, flag, value]);
+        assert!(
+            !out.ok && out.stderr.starts_with("error: ") && out.stderr.contains(flag),
+            "{flag} {value}: {}",
+            out.stderr
+        );
+    }
+    // A valid threshold is taken and reported.
+    let ok = impulse(&["reduce", &y, "--tsvd", "1e-10", "--until", "0.01"]);
+    assert!(ok.ok, "{}", ok.stderr);
+    assert_eq!(ok.json.unwrap()["rank"]["tsvd"].as_f64(), Some(1e-10));
+}
+
+/// `us_per_step` averages the steps after the warm-up: 20 steps, at most a quarter of the
+/// run; `--threads 1` is reported.
+#[test]
+fn us_per_step_times_the_steps_after_the_warm_up() {
+    for (until, timed) in [("0.2", 180), ("0.04", 30)] {
+        let out = impulse(&[
+            "reduce",
+            &mechanism("y.ron"),
+            "--until",
+            until,
+            "--threads",
+            "1",
+        ]);
+        assert!(out.ok, "{}", out.stderr);
+        let json = out.json.unwrap();
+        assert_eq!(json["timed_steps"].as_u64(), Some(timed), "--until {until}");
+        assert_eq!(json["threads"].as_u64(), Some(1));
+        let mean = json["us_per_step"].as_f64().unwrap();
+        let median = json["us_per_step_median"].as_f64().unwrap();
+        assert!(mean > 0.0 && median > 0.0);
+    }
+}
+
+/// The worked example of docs/forks.md ("Conventions"): the lever's compliance and stiffness
+/// against their closed forms (`C = c S Sᵀ`, `S = (0, L, 0, 0, 0, 1)`, `K = S Sᵀ/(c|S|⁴)`), its
+/// static positions against theirs (the follower load turns the reduced lever by exactly
+/// `c L F`, the world-fixed one the full lever by `θ = c L F cos θ`), and every number of the
+/// json block the document shows against what the command prints and writes.
+#[test]
+fn worked_example_of_the_docs() {
+    let dir = common::Scratch::new("reduce-worked-example");
+    let file = dir.join("lever.json");
+    let out = impulse(&[
+        "reduce",
+        &mechanism("lever.ron"),
+        "--load",
+        "arm:0,10,0",
+        "--static",
+        "--compliance",
+        file.to_str().unwrap(),
+    ]);
+    assert!(out.ok, "{}", out.stderr);
+    let printed = out.json.unwrap();
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    // Closed forms.
+    let (c, l, f) = (0.01, 0.5, 10.0);
+    let s = [0.0, l, 0.0, 0.0, 0.0, 1.0];
+    let s2: f64 = s.iter().map(|x| x * x).sum();
+    for a in 0..6 {
+        for b in 0..6 {
+            let got = |key: &str| written[key][a][b].as_f64().unwrap();
+            assert!((got("compliance") - c * s[a] * s[b]).abs() < COMPLIANCE_TOL);
+            assert!((got("stiffness") - s[a] * s[b] / (c * s2 * s2)).abs() < STIFFNESS_TOL);
+        }
+    }
+    let position = |key: &str| -> Vec<f64> {
+        printed["end_effectors"][0][key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let turn = c * l * f;
+    let reduced = position("reduced");
+    assert!(
+        (reduced[0] - l * turn.cos()).abs() < POSITION_TOL
+            && (reduced[1] - l * turn.sin()).abs() < POSITION_TOL
+    );
+    // θ = c L F cos θ by bisection.
+    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if mid - turn * mid.cos() > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let full = position("full");
+    assert!(
+        (full[0] - l * lo.cos()).abs() < FULL_POSITION_TOL
+            && (full[1] - l * lo.sin()).abs() < FULL_POSITION_TOL
+    );
+    // The document's block: every number in it as printed (the first part) or written (the
+    // `lever.json` part).
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/forks.md"))
+            .unwrap();
+    let marker = "<!-- worked-example: the test reads the next json block -->";
+    let start = doc.find(marker).expect("the worked example's marker") + marker.len();
+    let open = start + doc[start..].find("```json").unwrap() + "```json".len();
+    let close = open + doc[open..].find("```").unwrap();
+    let block: serde_json::Value = serde_json::from_str(&doc[open..close]).expect("valid json");
+    let mut shown = block.clone();
+    let file_part = shown.as_object_mut().unwrap().remove("lever.json").unwrap();
+    same_numbers("output", &shown, &printed);
+    same_numbers("lever.json", &file_part, &written);
+}
+
+/// Every number of `shown` (objects' keys followed into `actual`) equals `actual`'s to 1e-9
+/// relative (the document prints `relative_error` to four digits: 1e-3 there).
+fn same_numbers(path: &str, shown: &serde_json::Value, actual: &serde_json::Value) {
+    use serde_json::Value;
+    match shown {
+        Value::Object(o) => {
+            for (k, v) in o {
+                same_numbers(&format!("{path}.{k}"), v, &actual[k]);
+            }
+        }
+        Value::Array(a) => {
+            for (i, v) in a.iter().enumerate() {
+                same_numbers(&format!("{path}[{i}]"), v, &actual[i]);
+            }
+        }
+        Value::Number(n) => {
+            let (x, y) = (n.as_f64().unwrap(), actual.as_f64().unwrap_or(f64::NAN));
+            let tol = if path.ends_with("relative_error") {
+                1e-3
+            } else {
+                1e-9
+            };
+            assert!(
+                (x - y).abs() <= tol * x.abs().max(1e-300) || x == y,
+                "docs/forks.md {path}: {x} but the command gives {y}"
+            );
+        }
+        other => assert_eq!(other, actual, "docs/forks.md {path}"),
     }
 }

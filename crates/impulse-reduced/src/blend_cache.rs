@@ -32,8 +32,11 @@ pub(crate) struct Matching {
     /// `rank`, column-major, `n` values each). The closest model's own are its eigenvectors.
     vectors: Vec<Vec<f64>>,
     /// Per model: the eigenvalue each matched vector brings (its Rayleigh quotient; the
-    /// closest model's own eigenvalues for it).
+    /// closest model's own eigenvalues for it; zero where the model lacks the direction).
     values: Vec<Vec<f64>>,
+    /// Per model: its matrix on the closest model's inadmissible directions,
+    /// `P⊥ Aᵢ P⊥` (n × n, column-major), blended linearly ([`crate::blend::blend_rank1`]).
+    complement: Vec<Vec<f64>>,
 }
 
 /// Everything a blend with closest model c reuses: Algorithm 3's matching of the three
@@ -99,13 +102,16 @@ impl Matching {
         let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
         let mut vectors = Vec::with_capacity(eigs.len());
         let mut values = Vec::with_capacity(eigs.len());
+        let mut complement = Vec::with_capacity(eigs.len());
         for (i, e) in eigs.iter().enumerate() {
             if i == closest {
                 vectors.push(own[..rank].concat());
                 values.push(r0.values[..rank].to_vec());
+                complement.push(vec![0.0; n * n]);
                 continue;
             }
             let cols: Vec<Vec<f64>> = (0..n).map(|c| col(e, c)).collect();
+            let admissible = inadmissible_below(e);
             let mut used = vec![false; n];
             let mut v = vec![0.0; n * rank];
             let mut ev = vec![0.0; rank];
@@ -144,19 +150,29 @@ impl Matching {
                     }
                     // Rayleigh quotient of model i's matrix on the aligned vector.
                     let a = mats[i];
-                    ev[j0 + b] = (0..n)
+                    let q: f64 = (0..n)
                         .map(|r| out[r] * (0..n).map(|c| a[(r, c)] * out[c]).sum::<f64>())
                         .sum();
+                    if q <= admissible {
+                        // §7.5: a direction model i does not admit brings zero along the
+                        // closest model's own vector (not a stray one of its null space).
+                        out.copy_from_slice(&own[j0 + b]);
+                        ev[j0 + b] = 0.0;
+                    } else {
+                        ev[j0 + b] = q;
+                    }
                 }
             }
             vectors.push(v);
             values.push(ev);
+            complement.push(outside(mats[i], &own[rank..]));
         }
         Matching {
             n,
             rank,
             vectors,
             values,
+            complement,
         }
     }
 
@@ -190,8 +206,73 @@ impl Matching {
                 }
             }
         }
+        // The other models' directions the closest one does not admit, linearly.
+        for (i, a) in alpha.iter().enumerate() {
+            if i == closest || *a == 0.0 {
+                continue;
+            }
+            for b in 0..n {
+                for (x, y) in out
+                    .col_as_slice_mut(b)
+                    .iter_mut()
+                    .zip(&self.complement[i][b * n..(b + 1) * n])
+                {
+                    *x += a * y;
+                }
+            }
+        }
         out
     }
+}
+
+/// The Rayleigh quotient at or below which a direction is not admitted by a model with
+/// decomposition `e`: its truncation threshold (eq. 9 with [`crate::tol::TSVD_FACTOR`]) times
+/// its largest eigenvalue.
+pub(crate) fn inadmissible_below(e: &Eigen) -> f64 {
+    let n = e.values.len();
+    let largest = e.values.first().copied().unwrap_or(0.0).max(0.0);
+    crate::linalg::Tsvd::default().threshold(n, n, largest)
+}
+
+/// `P⊥ A P⊥` (column-major) with `P⊥ = Σ u uᵀ` over the vectors `null` (orthonormal): A on
+/// the directions the closest model does not admit (§7.5, "zero for inadmissible directions"
+/// for the closest model, the others' part there blended linearly).
+pub(crate) fn outside(a: &Mat<f64>, null: &[Vec<f64>]) -> Vec<f64> {
+    let n = a.nrows();
+    let k = null.len();
+    if k == 0 {
+        return vec![0.0; n * n];
+    }
+    // B = Uᵀ A U (k × k), then P⊥ A P⊥ = U B Uᵀ.
+    let au: Vec<Vec<f64>> = null
+        .iter()
+        .map(|u| {
+            (0..n)
+                .map(|r| (0..n).map(|c| a[(r, c)] * u[c]).sum())
+                .collect()
+        })
+        .collect();
+    let b: Vec<Vec<f64>> = null
+        .iter()
+        .map(|u| {
+            au.iter()
+                .map(|x| u.iter().zip(x).map(|(p, q)| p * q).sum())
+                .collect()
+        })
+        .collect();
+    let mut out = vec![0.0; n * n];
+    for col in 0..n {
+        for row in 0..n {
+            let mut s = 0.0;
+            for (p, bp) in b.iter().enumerate() {
+                for (q, bpq) in bp.iter().enumerate() {
+                    s += null[p][row] * bpq * null[q][col];
+                }
+            }
+            out[col * n + row] = s;
+        }
+    }
+    out
 }
 
 /// eq. 28 with the logarithms of `logs` (`log(H⁽ᶜ⁾⁻¹ H⁽ʲ⁾)` for every model j, c the closest):

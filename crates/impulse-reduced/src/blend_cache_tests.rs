@@ -10,11 +10,10 @@ use super::*;
 use crate::blend::{BlendedModel, Eigen, blend_poses, blend_rank1, elastic_wrench, scaled_norm};
 use crate::construct::{ConstructOptions, ReducedModel};
 use crate::internal::link_twist;
-use crate::linalg::{Tsvd, pinv, pinv_rank};
+use crate::linalg::{Tsvd, pinv};
 use crate::mechanism::Mechanism;
 use crate::reference::{Configuration, Load, StaticOptions, solve_statics};
 use crate::testutil::{max_abs, rng};
-use crate::tol;
 
 /// Cached and per-call blends agree to rounding: the same sums in the same order, with the
 /// matched vectors and Rayleigh quotients formed by other code (relative to the largest
@@ -178,7 +177,8 @@ fn cached_algorithm_3_and_eq_28_equal_the_per_call_forms() {
 }
 
 /// What [`per_call`] returns: (blended matrix, inverse) for compliance, accelerability and
-/// damping compliance, the closest model's rank, `H̄_e` and the internal links.
+/// damping compliance, the blend's rank (its admissible directions), `H̄_e` and the internal
+/// links.
 type PerCall = ([(Mat<f64>, Mat<f64>); 3], usize, Vec<Pose>, Vec<Pose>);
 
 /// `BlendedModel::blend` and Algorithm 4 as they were before the cache: every quantity from
@@ -194,23 +194,39 @@ fn per_call(set: &BlendedModel, ee: &[Pose]) -> PerCall {
         .iter()
         .map(|x| pinv(x.damping.as_ref(), Tsvd::default()).unwrap().inverse)
         .collect();
-    let blended = |mats: Vec<&Mat<f64>>| {
+    let blend = |mats: Vec<&Mat<f64>>| {
         let eigs: Vec<Eigen> = mats.iter().map(|x| Eigen::new(x).unwrap()).collect();
         let e: Vec<&Eigen> = eigs.iter().collect();
-        let b = blend_rank1(&e, &mats, &alpha, rank);
-        let inv = pinv_rank(
-            b.as_ref(),
-            rank,
-            Tsvd::default(),
-            0.0,
-            tol::RANK_GAP,
-            "test",
-        );
-        (b, inv.unwrap().inverse)
+        blend_rank1(&e, &mats, &alpha, rank)
     };
-    let (compliance, stiffness) = blended(models.iter().map(|x| &x.compliance).collect());
-    let mass = blended(models.iter().map(|x| &x.accelerability).collect());
-    let damping = blended(dcomp.iter().collect());
+    let compliance = blend(models.iter().map(|x| &x.compliance).collect());
+    // The blend's admissible directions: C̄'s eigenvectors above the truncation threshold
+    // (§7.5, the union of the weighted models' directions), and every inverse on them by LU:
+    // B (Bᵀ X B)⁻¹ Bᵀ.
+    let ec = Eigen::new(&compliance).unwrap();
+    let n = compliance.nrows();
+    let threshold = Tsvd::default().threshold(n, n, ec.values[0]);
+    let admitted = ec.values.iter().filter(|&&x| x > threshold).count();
+    let basis = Mat::from_fn(n, admitted, |i, j| ec.vectors[(i, j)]);
+    let inverse = |x: &Mat<f64>| -> Mat<f64> {
+        use faer::linalg::solvers::Solve;
+        let r = basis.transpose() * x * &basis;
+        let inv = r
+            .partial_piv_lu()
+            .solve(Mat::<f64>::identity(admitted, admitted));
+        &basis * inv * basis.transpose()
+    };
+    let stiffness = inverse(&compliance);
+    let mass = {
+        let b = blend(models.iter().map(|x| &x.accelerability).collect());
+        let i = inverse(&b);
+        (b, i)
+    };
+    let damping = {
+        let b = blend(dcomp.iter().collect());
+        let i = inverse(&b);
+        (b, i)
+    };
     let reference: Vec<Pose> = (0..ee.len())
         .map(|e| {
             let p: Vec<Pose> = models.iter().map(|x| x.reference[e]).collect();
@@ -230,7 +246,7 @@ fn per_call(set: &BlendedModel, ee: &[Pose]) -> PerCall {
         .collect();
     (
         [(compliance, stiffness), mass, damping],
-        rank,
+        admitted,
         reference,
         links,
     )

@@ -6,12 +6,14 @@ use faer::Mat;
 use impulse_geom::{Mat6, Pose, SpatialInertia, Twist, Wrench};
 
 use crate::error::Error;
-use crate::linalg::{Tsvd, null_space, pinv, pinv_rank, rank_scaled, to_faer};
+use crate::linalg::{Pinv, Tsvd, pinv, pinv_rank, to_faer};
 use crate::mechanism::Mechanism;
-use crate::reference::kinematics::{
-    Configuration, body_jacobian, joint_jacobian, link_poses, loop_jacobian,
+use crate::rank::{
+    Conditioning, Diagnostics, DroppedDirection, RankReport, RankWarning, compliance_rank,
+    constrain, factored_inverse, motion_rank,
 };
-use crate::reference::{LinearStatics, Load};
+use crate::reference::kinematics::{Configuration, joint_jacobian, link_poses};
+use crate::reference::{JointMatrix, LinearStatics, Load};
 use crate::tol;
 use crate::walk::{JointInput, walk};
 
@@ -77,6 +79,9 @@ pub struct ReducedModel {
     pub base_inertia: SpatialInertia,
     /// Pose of the base at the linearisation point (world).
     pub base_pose: Pose,
+    /// Every rank decision of the construction, the directions treated as rigid, the
+    /// conditioning and the warnings ([`crate::rank`]).
+    pub diagnostics: Diagnostics,
 }
 
 fn stack(blocks: &[Vec<Mat6>], rows: &[usize]) -> Mat<f64> {
@@ -127,46 +132,19 @@ pub(crate) fn compliance_inputs(m: &Mechanism, cols: &[Mat<f64>]) -> Vec<JointIn
         .collect()
 }
 
-/// Rank of `J_E Z`: the end effectors' degrees of freedom counted from the joints.
-fn expected_rank(
-    m: &Mechanism,
-    q: &Configuration,
-    poses: &[Pose],
-    tsvd: Tsvd,
-) -> Result<usize, Error> {
-    let nl = m.loop_joints.len();
-    let mut g = Mat::<f64>::zeros(6 * nl, m.ndof);
-    for (k, &ji) in m.loop_joints.iter().enumerate() {
-        let gk = loop_jacobian(m, q, poses, ji);
-        for c in 0..m.ndof {
-            for r in 0..6 {
-                g[(6 * k + r, c)] = gk[(r, c)];
-            }
-        }
-    }
-    let z = null_space(g.as_ref(), tsvd)?;
-    let mut je = Mat::<f64>::zeros(6 * m.end_effectors.len(), m.ndof);
-    for (i, &e) in m.end_effectors.iter().enumerate() {
-        let j = body_jacobian(m, q, poses, e);
-        for c in 0..m.ndof {
-            for r in 0..6 {
-                je[(6 * i + r, c)] = j[(r, c)];
-            }
-        }
-    }
-    // Judge J_E Z against the size of J_E itself: a locked mechanism has J_E Z ≈ round-off.
-    let scale = crate::linalg::max_abs(je.as_ref());
-    rank_scaled((je * z).as_ref(), tsvd, scale)
-}
-
 impl ReducedModel {
     /// Builds the model of `m` linearised at configuration `q` (which must close every loop: the
     /// rest pose, or a [`crate::reference::StaticSolution`]); `loads` are the loads that hold
     /// `q` in equilibrium (empty at rest), kept as the bias `b`.
     ///
+    /// The rank of the end-effector maps is decided on the joints' compliance-weighted
+    /// motions at the threshold of `options.tsvd` and every decision is reported in
+    /// [`ReducedModel::diagnostics`] ([`crate::rank`]).
+    ///
     /// # Errors
-    /// [`Error::Rank`] when the truncated SVD's rank of `C` disagrees with the rank of the
-    /// joints' Jacobian `J_E Z`; [`Error::LinearAlgebra`] when a factorisation fails.
+    /// [`Error::Unresolved`] when the threshold keeps a direction whose compliance the walk
+    /// cannot resolve; [`Error::Rank`] when the accelerability or damping do not have the
+    /// compliance's rank; [`Error::LinearAlgebra`] when a factorisation fails.
     pub fn build(
         m: &Mechanism,
         q: &Configuration,
@@ -178,27 +156,50 @@ impl ReducedModel {
         let ee = &m.end_effectors;
         let ne = ee.len();
         let cols = all_columns(m, q);
+        let mut maps = Vec::new();
 
-        // Compliance (eqs. 10–14).
+        // The rank of the end-effector maps, from the joints' compliance-weighted motions
+        // W = J_E F (σ(C) = σ(W)²; see crate::rank): the full linearised statics.
+        let lin = LinearStatics::new(m, q, tsvd)?;
+        let je_size = crate::linalg::max_abs(lin.stacked(ee).as_ref());
+        let c_size = m
+            .joints
+            .iter()
+            .flat_map(|j| j.compliance.iter())
+            .fold(0.0_f64, |a, &c| a.max(c));
         let cw = walk(m, &poses, &compliance_inputs(m, &cols), tsvd)?;
-        let compliance = symmetrise(&stack(&cw.to_end_effectors, ee));
-        // Rank check: truncate C at the rank of J_E Z (the joints' count), and only if C's
-        // spectrum has a clear gap there (eq. 9 threshold below, tol::RANK_GAP above).
-        let expected = expected_rank(m, q, &poses, tsvd)?;
-        let kp = pinv_rank(
-            compliance.as_ref(),
-            expected,
-            tsvd,
-            cw.scale,
-            tol::RANK_GAP,
-            "end-effector compliance",
-        )?;
+        let w = lin.weighted_motions(ee);
+        let (rank, allowed, w_report) = motion_rank(&w, tsvd, je_size * c_size.sqrt(), cw.scale)?;
+        maps.push(w_report.clone());
+        maps.extend(lin.closure_report.iter().cloned());
 
-        // Accelerability (eq. 7, or exact).
-        let (accelerability, accel_scale) = match options.mass {
+        // Compliance (eqs. 10–14), truncated at that rank if the walk resolves it; its
+        // measured round-off is its difference from the Schur complement J_E C_θ J_Eᵀ.
+        maps.extend(cw.merges.iter().map(|b| b.report.clone()));
+        let compliance = symmetrise(&stack(&cw.to_end_effectors, ee));
+        let schur = lin.compliance_of(ee);
+        let error = frobenius(&(&compliance - &schur));
+        let (stiffness, c_report) = compliance_rank(&compliance, rank, tsvd, error)?;
+        // The directions the joints allow but the threshold drops, from W (accurate; C's own
+        // eigenvectors of its null space are tilted by its round-off over its small
+        // eigenvalues), as columns: held rigid in A and D.
+        let dropped = dropped_directions(&w, rank, allowed)?;
+        let rigid = Mat::from_fn(6 * ne, dropped.len(), |r, k| dropped[k].twist[r]);
+        maps.push(c_report.clone());
+
+        // Accelerability (eq. 7, or exact), constrained to the directions C keeps (the
+        // dropped ones are rigid: Gauss's principle, crate::rank::constrain).
+        let (accelerability, mass, a_report) = match options.mass {
             MassModel::Exact => {
-                let lin = LinearStatics::new(m, q, tsvd)?;
-                (symmetrise(&lin.accelerability_of(m, ee, tsvd)?), 0.0)
+                // A = V Vᵀ, V = J_E Z (Zᵀ M_q Z)^(−½): inverted from V's SVD (rank.rs).
+                let mq = lin.joint_mass_matrix(m);
+                let v = lin.factor_motions(ee, JointMatrix::Dense(&mq))?;
+                factored_inverse(
+                    &v,
+                    &rigid,
+                    rank,
+                    "end-effector accelerability A (C's rigid directions held)",
+                )?
             }
             MassModel::Paper => {
                 let inputs: Vec<JointInput> = m
@@ -215,47 +216,49 @@ impl ReducedModel {
                     })
                     .collect::<Result<_, Error>>()?;
                 let aw = walk(m, &poses, &inputs, tsvd)?;
-                (symmetrise(&stack(&aw.to_end_effectors, ee)), aw.scale)
+                let a = constrain(&symmetrise(&stack(&aw.to_end_effectors, ee)), &rigid, tsvd)?;
+                let mp = pinv_rank(
+                    a.as_ref(),
+                    rank,
+                    tsvd,
+                    aw.scale,
+                    tol::RANK_GAP,
+                    "end-effector accelerability (eq. 7)",
+                )?;
+                let r = report(
+                    "end-effector accelerability A, eq. 7 (C's rigid directions held)",
+                    &mp,
+                );
+                (a, mp.inverse, r)
             }
         };
-        let mass = pinv_rank(
-            accelerability.as_ref(),
-            expected,
-            tsvd,
-            accel_scale,
-            tol::RANK_GAP,
-            "end-effector accelerability",
-        )?
-        .inverse;
+        maps.push(a_report.clone());
 
-        // Damping: the walk on the damping compliance D_θ⁻¹ ("the same projection", §3.1).
+        // Damping: "the same projection" (§3.1), `J_E Z (Zᵀ D_q Z)⁻¹ Zᵀ J_Eᵀ` in factored form
+        // (as the accelerability), inverted at the compliance's rank.
         let damped = m.joints.iter().any(|j| j.damping.iter().any(|&d| d > 0.0));
         let damping = if damped {
-            let inputs: Vec<JointInput> = m
+            let d: Vec<f64> = m
                 .joints
                 .iter()
-                .zip(&cols)
-                .map(|(j, c)| JointInput {
-                    columns: c.clone(),
-                    matrix: Mat::from_fn(j.dof(), j.dof(), |a, b| {
-                        if a == b { 1.0 / j.damping[a] } else { 0.0 }
-                    }),
-                })
+                .flat_map(|j| j.damping.iter().copied())
                 .collect();
-            let dw = walk(m, &poses, &inputs, tsvd)?;
-            let dc = symmetrise(&stack(&dw.to_end_effectors, ee));
-            pinv_rank(
-                dc.as_ref(),
-                expected,
-                tsvd,
-                dw.scale,
-                tol::RANK_GAP,
-                "end-effector damping",
-            )?
-            .inverse
+            let v = lin.factor_motions(ee, JointMatrix::Diagonal(&d))?;
+            let (_, dmat, r) = factored_inverse(
+                &v,
+                &rigid,
+                rank,
+                "end-effector damping compliance D⁺ (C's rigid directions held)",
+            )?;
+            maps.push(r);
+            dmat
         } else {
             Mat::zeros(6 * ne, 6 * ne)
         };
+
+        let diagnostics = diagnose(
+            maps, &w_report, &c_report, &a_report, allowed, rank, dropped, error, tsvd,
+        )?;
 
         // Twist maps (eq. 22): the coupled compliance between each internal link and the end
         // effectors.
@@ -295,18 +298,19 @@ impl ReducedModel {
             config: q.clone(),
             end_effectors: ee.clone(),
             reference: ee.iter().map(|&e| poses[e]).collect(),
-            stiffness: symmetrise(&kp.inverse),
+            stiffness: symmetrise(&stiffness),
             compliance,
-            accelerability,
+            accelerability: symmetrise(&accelerability),
             mass: symmetrise(&mass),
             damping: symmetrise(&damping),
-            rank: kp.rank,
+            rank,
             bias,
             internal_reference: internal.iter().map(|&l| poses[l]).collect(),
             internal,
             twist_maps,
             base_inertia,
             base_pose,
+            diagnostics,
         })
     }
 
@@ -343,6 +347,119 @@ impl ReducedModel {
     pub fn stack_wrenches(w: &[Wrench]) -> Vec<f64> {
         w.iter().flat_map(|x| x.to_array()).collect()
     }
+}
+
+/// `‖a‖_F`.
+fn frobenius(a: &Mat<f64>) -> f64 {
+    let mut s = 0.0;
+    for j in 0..a.ncols() {
+        for i in 0..a.nrows() {
+            s += a[(i, j)] * a[(i, j)];
+        }
+    }
+    s.sqrt()
+}
+
+/// The report of a [`Pinv`] of a square map.
+fn report(map: &str, p: &Pinv) -> RankReport {
+    let n = p.singular.len();
+    RankReport::new(map, (n, n), p.singular.clone(), p.threshold, p.rank)
+}
+
+/// The directions the joints allow but the threshold drops: W's left singular vectors past
+/// `rank` up to `allowed`, with their relative compliance `(σ/σ₁)²`.
+fn dropped_directions(
+    w: &Mat<f64>,
+    rank: usize,
+    allowed: usize,
+) -> Result<Vec<DroppedDirection>, Error> {
+    let mut dropped = Vec::new();
+    if allowed > rank {
+        let svd = w
+            .thin_svd()
+            .map_err(|e| Error::LinearAlgebra(format!("SVD of J_E·F: {e:?}")))?;
+        let (s, u) = (svd.S(), svd.U());
+        let mut idx: Vec<usize> = (0..s.dim()).collect();
+        idx.sort_by(|&a, &b| s[b].total_cmp(&s[a]));
+        let largest = s[idx[0]];
+        for &i in &idx[rank..allowed] {
+            dropped.push(DroppedDirection {
+                compliance: (s[i] / largest).powi(2),
+                twist: (0..w.nrows()).map(|r| u[(r, i)]).collect(),
+            });
+        }
+    }
+    Ok(dropped)
+}
+
+/// The diagnostics of a construction: the maps' reports, the directions treated as rigid,
+/// conditioning and warnings.
+#[allow(clippy::too_many_arguments)]
+fn diagnose(
+    maps: Vec<RankReport>,
+    w_report: &RankReport,
+    c_report: &RankReport,
+    a_report: &RankReport,
+    allowed: usize,
+    rank: usize,
+    dropped: Vec<DroppedDirection>,
+    error: f64,
+    tsvd: Tsvd,
+) -> Result<Diagnostics, Error> {
+    let largest_c = c_report.largest();
+    let compliance_error = if largest_c > 0.0 {
+        error / largest_c
+    } else {
+        0.0
+    };
+    let conditioning = Conditioning {
+        compliance_condition: c_report.condition(),
+        compliance_error,
+        stiffness_error: c_report.condition() * compliance_error,
+        accelerability_condition: a_report.condition(),
+    };
+    let mut warnings = Vec::new();
+    // The end-effector cut, judged on W (accurate): C's gap is W's squared.
+    let w_gap = w_report.gap().powi(2);
+    if w_gap > tol::RANK_GAP {
+        warnings.push(RankWarning::SmallGap {
+            map: c_report.map.clone(),
+            rank,
+            gap: w_gap,
+        });
+    }
+    // The walk's internal cuts (loop closure, merges): a dropped singular value near the kept.
+    for r in &maps {
+        let internal = r.map.starts_with("merge") || r.map.starts_with("loop closure");
+        if internal && r.rank > 0 && r.rank < r.singular.len() && r.gap() > tol::RANK_GAP {
+            warnings.push(RankWarning::SmallGap {
+                map: r.map.clone(),
+                rank: r.rank,
+                gap: r.gap(),
+            });
+        }
+    }
+    if let Some(d) = dropped.first() {
+        warnings.push(RankWarning::NearSingular {
+            allowed,
+            rank,
+            largest_dropped: d.compliance,
+        });
+    }
+    if conditioning.stiffness_error > tol::STIFFNESS_ACCURACY_WARN {
+        warnings.push(RankWarning::IllConditioned {
+            condition: conditioning.compliance_condition,
+            accuracy: conditioning.stiffness_error,
+        });
+    }
+    Ok(Diagnostics {
+        relative_threshold: tsvd.relative_threshold(c_report.rows, c_report.rows),
+        allowed,
+        maps,
+        dropped,
+        conditioning,
+        warnings,
+    })
 }
 
 #[cfg(test)]

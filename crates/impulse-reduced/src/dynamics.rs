@@ -139,6 +139,14 @@ struct Contact {
     gap: f64,
 }
 
+/// Where a simulation places its internal links ([`ReducedSim::set_threads`]).
+enum Threads {
+    /// On the calling thread.
+    Caller,
+    /// On a pool of its own.
+    Pool(rayon::ThreadPool),
+}
+
 /// A running reduced simulation of one model.
 pub struct ReducedSim {
     /// The model. The factored system matrix and the internal links' kernel are derived from
@@ -181,6 +189,9 @@ pub struct ReducedSim {
     /// The deformed centre of mass (base frame) computed at the end of the last step, and the
     /// ξ it belongs to: the next step starts from it unless ξ was edited in between.
     com_at: Option<(Vec<f64>, DVec3)>,
+    /// The threads that place the internal links ([`ReducedSim::set_threads`]): `None`,
+    /// rayon's global pool (every core); one thread, the calling one; more, a pool of them.
+    pool: Option<Threads>,
 }
 
 impl ReducedSim {
@@ -251,8 +262,41 @@ impl ReducedSim {
                 .map(|l| (l, m.links[l].rest))
                 .collect(),
             com_at: None,
+            pool: None,
             model,
         })
+    }
+
+    /// Places the internal links on `threads` threads of the simulation's own (instead of
+    /// rayon's global pool, every core). On a small mechanism one thread is the fastest
+    /// (docs/forks.md, Table 1), and its step time does not wait on a second core.
+    ///
+    /// # Errors
+    /// [`Error::Argument`] for zero threads or when the pool cannot be built.
+    pub fn set_threads(&mut self, threads: usize) -> Result<(), Error> {
+        if threads == 0 {
+            return Err(Error::Argument("threads: need at least one".to_owned()));
+        }
+        self.pool = Some(if threads == 1 {
+            Threads::Caller
+        } else {
+            Threads::Pool(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .map_err(|e| Error::Argument(format!("threads: {e}")))?,
+            )
+        });
+        Ok(())
+    }
+
+    /// `self.links.update` on the simulation's threads.
+    fn update_links(&self, frame: &Pose, out: &mut [Pose]) {
+        match &self.pool {
+            Some(Threads::Caller) => self.links.update_on(true, &self.xi, frame, out),
+            Some(Threads::Pool(pool)) => pool.install(|| self.links.update(&self.xi, frame, out)),
+            None => self.links.update(&self.xi, frame, out),
+        }
     }
 
     /// World pose of end effector `i`: `H_b H_b0⁻¹ H_e exp(ξ_e)` (eq. 6; `H_b = H_b0` for a
@@ -276,7 +320,7 @@ impl ReducedSim {
         let frame = self
             .base
             .map_or(Pose::IDENTITY, |b| b.pose * self.base_rest.inverse());
-        self.links.update(&self.xi, &frame, out);
+        self.update_links(&frame, out);
     }
 
     /// Per-step error estimate: the relative constraint error (§8.2) of the reconstructed
@@ -307,7 +351,7 @@ impl ReducedSim {
     /// link's own centre of mass. Costs one internal-link update.
     fn deformed_com(&self) -> DVec3 {
         let mut internal = vec![Pose::IDENTITY; self.model.internal.len()];
-        self.links.update(&self.xi, &Pose::IDENTITY, &mut internal);
+        self.update_links(&Pose::IDENTITY, &mut internal);
         let mass_com = |l: usize, pose: &Pose| {
             let (mass, com) = self.link_mass[l];
             pose.transform_point(com) * mass

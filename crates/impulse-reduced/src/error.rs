@@ -100,7 +100,8 @@ pub enum Error {
     /// The rank found by the truncated SVD disagrees with the rank expected from the joints.
     #[error(
         "rank check failed at {at}: truncated SVD gives rank {found}, the joints give {expected} \
-         (tolerance {tolerance:e}; adjust `Tsvd` or check the mechanism)"
+         (threshold {tolerance:e}; set it with `impulse reduce --tsvd` or `Tsvd::with_relative`, \
+         or check the mechanism)"
     )]
     Rank {
         /// Where (e.g. "end-effector compliance").
@@ -111,6 +112,22 @@ pub enum Error {
         expected: usize,
         /// The tolerance used.
         tolerance: f64,
+    },
+    /// The threshold keeps an end-effector direction whose compliance is below the round-off
+    /// of the walk's compliance: the model cannot resolve it.
+    #[error(
+        "end-effector compliance: at this threshold the joints' motions keep {rank} directions, \
+         but the smallest has compliance {compliance:.2e} of the largest, at or below the \
+         round-off of C ({floor:.2e} of it): the walk cannot resolve it; use --tsvd above \
+         {floor:.2e} to treat it as rigid"
+    )]
+    Unresolved {
+        /// Directions the threshold keeps.
+        rank: usize,
+        /// The smallest kept direction's compliance, relative to the largest.
+        compliance: f64,
+        /// The round-off of C relative to its largest singular value.
+        floor: f64,
     },
     /// A dense factorisation failed (non-finite input).
     #[error("linear algebra failed: {0}")]
@@ -125,7 +142,36 @@ pub enum Error {
         /// Iterations used.
         iterations: usize,
     },
+    /// The nonlinear statics could not follow the equilibrium to the full load.
+    #[error(
+        "static solve found no equilibrium: {reason}; stopped at load fraction {fraction:.6} \
+         (increment {step:.3e} refused); worst equation: {worst}; relative residual of the \
+         last attempt, per Newton iteration: [{}]",
+        scientific(.history)
+    )]
+    NoEquilibrium {
+        /// Fraction of the load path reached (0 = the start's loads, 1 = the full load).
+        fraction: f64,
+        /// The last load increment tried (fraction of the path).
+        step: f64,
+        /// Why the last increment failed.
+        reason: String,
+        /// The equation furthest from balance: a joint coordinate's force or a loop's
+        /// closure, named.
+        worst: String,
+        /// The relative residual after each Newton iteration of the last attempt.
+        history: Vec<f64>,
+    },
     /// An argument of a call is malformed (wrong length, unknown name, NaN).
     #[error("{0}")]
     Argument(String),
+}
+
+/// `[1.234e-3, …]`-style list of the numbers (three decimals of mantissa).
+fn scientific(values: &[f64]) -> String {
+    values
+        .iter()
+        .map(|x| format!("{x:.3e}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }

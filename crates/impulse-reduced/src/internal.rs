@@ -284,6 +284,16 @@ impl InternalLinks {
     /// If `out` does not have one entry per internal link or `xi` one entry per end-effector
     /// direction (caller bugs).
     pub fn update(&self, xi: &[f64], frame: &Pose, out: &mut [Pose]) {
+        self.update_on(rayon::current_num_threads() == 1, xi, frame, out);
+    }
+
+    /// [`InternalLinks::update`] on the calling thread alone when `serial` (no hand-over to a
+    /// pool's worker and back: on one thread that costs more than the links themselves), in
+    /// parallel batches on the current rayon pool otherwise.
+    ///
+    /// # Panics
+    /// As [`InternalLinks::update`].
+    pub fn update_on(&self, serial: bool, xi: &[f64], frame: &Pose, out: &mut [Pose]) {
         assert_eq!(out.len(), self.count, "one output pose per internal link");
         assert_eq!(
             xi.len(),
@@ -299,7 +309,7 @@ impl InternalLinks {
                 }
             }
         };
-        if rayon::current_num_threads() == 1 {
+        if serial {
             batch(0, out);
         } else {
             out.par_chunks_mut(LINK_BATCH)

@@ -10,12 +10,15 @@
 //!   nonlinear statics with loop closure;
 //! - the construction of the reduced model (§4–5): the chain/split/merge walk
 //!   ([`walk`], Algorithm 1, exact for any DAG walkable from the base), truncated SVD with a
-//!   rank check ([`linalg`], eq. 9), coupled compliance, accelerability (the paper's projection
+//!   rank check ([`linalg`], eq. 9), every rank decision and the conditioning reported
+//!   ([`rank`]), coupled compliance, accelerability (the paper's projection
 //!   or the exact `J M⁻¹ Jᵀ`), damping and the twist maps ([`construct`]); the wrench maps
 //!   (eqs. 15–20, Algorithm 2, [`wrench`]);
 //! - reduced dynamics (§6, [`dynamics`]): backward Euler with eq. 23's sign fixed, projected
 //!   Gauss–Seidel contact with Coulomb friction against [`obstacle`]s, a free base; internal
 //!   links in parallel ([`internal`]);
+//! - the model as plain data with its frames and units ([`export`], what
+//!   `impulse reduce --compliance` writes); honest step timing ([`timing`]);
 //! - blending of several linearisation points (§7, [`blend`]), their automatic choice
 //!   ([`select`], beyond the paper), the Fig. 7 study ([`study`]) and the bundled mechanisms
 //!   ([`scenes`]).
@@ -33,20 +36,25 @@
 pub mod blend;
 mod blend_cache;
 pub mod construct;
+pub mod convergence;
 mod desc;
 pub mod dynamics;
 mod error;
+pub mod export;
+pub mod hard_cases;
 pub mod internal;
 mod lanes;
 pub mod linalg;
 mod mechanism;
 pub mod obstacle;
+pub mod rank;
 pub mod reference;
 pub mod scenes;
 pub mod select;
 pub mod study;
 #[cfg(test)]
 mod testutil;
+pub mod timing;
 pub mod tol;
 pub mod walk;
 pub mod wrench;
@@ -55,7 +63,9 @@ pub use construct::{ConstructOptions, MassModel, ReducedModel};
 pub use desc::{BaseDesc, JointDesc, JointKindDesc, LinkDesc, MechanismDesc, ShapeDesc};
 pub use dynamics::{BaseState, ContactParams, ReducedSim, StepReport};
 pub use error::Error;
+pub use export::ModelExport;
 pub use linalg::Tsvd;
 pub use mechanism::{Direction, Joint, Link, Mechanism, Shape};
 pub use obstacle::{HeightField, Obstacle};
+pub use rank::{Diagnostics, RankReport, RankWarning};
 pub use wrench::WrenchMaps;

@@ -7,28 +7,73 @@ use impulse_geom::Mat6;
 use crate::error::Error;
 
 /// Truncated-SVD threshold (FORK⁻¹S §3.2, eq. 9): singular values at or below
-/// `factor · max(m, n) · σ_max · ε_mach` count as zero.
+/// `factor · max(m, n) · σ_max · ε_mach` count as zero — or, when [`Tsvd::relative`] is set
+/// (`impulse reduce --tsvd`), at or below `τ · σ_max`.
+///
+/// **Choosing it** (docs/forks.md, "Rank and conditioning"): eq. 9 bounds the round-off of one
+/// SVD; the reduced matrices carry the round-off of the whole walk, and a direction whose
+/// compliance is below that cannot be resolved at all. The default (eq. 9 times
+/// [`crate::tol::TSVD_FACTOR`], ~1.3e-13 relative for one end effector) sits just above it.
+/// Raise τ to treat nearly rigid directions as rigid (a near-singular configuration: the
+/// report names what is dropped and bounds what it changes, at most τ of the largest
+/// compliance); lowering it below the default cannot recover a direction the walk cannot
+/// resolve (`ReducedModel::build` refuses that, naming the direction's singular value).
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Tsvd {
-    /// Factor on eq. 9 (1 is the paper's formula; see [`crate::tol::TSVD_FACTOR`]).
+    /// Factor on eq. 9 (1 is the paper's formula; see [`crate::tol::TSVD_FACTOR`]); used
+    /// unless [`Tsvd::relative`] is set.
     pub factor: f64,
+    /// A relative threshold τ replacing eq. 9: singular values at or below `τ · σ_max` are
+    /// dropped. Set through [`Tsvd::with_relative`], which checks `0 < τ < 1`.
+    pub relative: Option<f64>,
 }
 
 impl Default for Tsvd {
     fn default() -> Self {
         Tsvd {
             factor: crate::tol::TSVD_FACTOR,
+            relative: None,
         }
     }
 }
 
 impl Tsvd {
+    /// A relative threshold τ (`impulse reduce --tsvd`).
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] unless τ is a finite number strictly between 0 and 1.
+    pub fn with_relative(tau: f64) -> Result<Self, Error> {
+        if tau.is_finite() && tau > 0.0 && tau < 1.0 {
+            Ok(Tsvd {
+                relative: Some(tau),
+                ..Tsvd::default()
+            })
+        } else {
+            Err(Error::OutOfRange {
+                owner: "truncated SVD".to_owned(),
+                field: "relative threshold",
+                reason: format!(
+                    "is {tau}; it must be a number strictly between 0 and 1 (singular values \
+                     at or below that fraction of the largest are dropped)"
+                ),
+            })
+        }
+    }
+
+    /// The threshold relative to `σ_max` for an `m × n` matrix: τ, or eq. 9's
+    /// `factor · max(m, n) · ε_mach`.
+    #[must_use]
+    pub fn relative_threshold(&self, m: usize, n: usize) -> f64 {
+        // FORK⁻¹S eq. 9: ε = max(m, n)·‖A‖·ε_machine, scaled by `factor`.
+        self.relative
+            .unwrap_or(self.factor * (m.max(n) as f64) * f64::EPSILON)
+    }
+
     /// The absolute threshold for an `m × n` matrix whose largest singular value is `sigma_max`
-    /// (eq. 9).
+    /// (eq. 9, or τ·σ_max).
     #[must_use]
     pub fn threshold(&self, m: usize, n: usize, sigma_max: f64) -> f64 {
-        // FORK⁻¹S eq. 9: ε = max(m, n)·‖A‖·ε_machine, scaled by `factor`.
-        self.factor * (m.max(n) as f64) * sigma_max * f64::EPSILON
+        self.relative_threshold(m, n) * sigma_max
     }
 }
 
@@ -41,6 +86,8 @@ pub struct Pinv {
     pub rank: usize,
     /// The threshold used.
     pub threshold: f64,
+    /// Every singular value, descending.
+    pub singular: Vec<f64>,
 }
 
 /// Truncated-SVD pseudo-inverse of `a` (FORK⁻¹S §3.1–3.2).
@@ -66,6 +113,7 @@ pub fn pinv_scaled(a: MatRef<'_, f64>, tsvd: Tsvd, scale: f64) -> Result<Pinv, E
             inverse: Mat::zeros(n, m),
             rank: 0,
             threshold: 0.0,
+            singular: Vec::new(),
         });
     }
     check_finite(a)?;
@@ -97,7 +145,15 @@ pub fn pinv_scaled(a: MatRef<'_, f64>, tsvd: Tsvd, scale: f64) -> Result<Pinv, E
         inverse,
         rank,
         threshold,
+        singular: descending((0..k).map(|i| s[i]).collect()),
     })
+}
+
+/// `v` sorted descending (faer returns singular values in non-increasing order already;
+/// sorted here so that no caller depends on it).
+fn descending(mut v: Vec<f64>) -> Vec<f64> {
+    v.sort_by(|a, b| b.total_cmp(a));
+    v
 }
 
 /// Pseudo-inverse of the symmetric positive semi-definite `a` truncated to exactly `r`
@@ -124,6 +180,7 @@ pub fn pinv_rank(
             inverse: Mat::zeros(n, m),
             rank: 0,
             threshold: 0.0,
+            singular: Vec::new(),
         });
     }
     let svd = a
@@ -162,6 +219,7 @@ pub fn pinv_rank(
         inverse,
         rank: r,
         threshold,
+        singular: sv,
     })
 }
 

@@ -14,8 +14,7 @@ const CLOSED_FORM_TOL: f64 = 1e-9;
 
 /// Blended relative constraint error allowed at a sample point: there the blend is that
 /// sample's model, whose static solution is the full one (issue 14: "zero at sample points
-/// (≤ 1e-9)"); measured ≤ 6.5e-13 on the "Y" and ≤ 1.2e-13 on the ladder (the ladder's full
-/// solves stop at [`LADDER_STATIC_TOLERANCE`]).
+/// (≤ 1e-9)"); measured ≤ 6.5e-13 on the "Y" and ≤ 1.2e-13 on the ladder.
 const EXACT_AT_SAMPLE: f64 = 1e-9;
 
 /// How far the ladder's single-model reading at displacement 1 may pass the top of
@@ -24,10 +23,10 @@ const EXACT_AT_SAMPLE: f64 = 1e-9;
 /// rounded up to 5%.
 const LADDER_BAND_EXCESS: f64 = 0.05;
 
-/// Newton tolerance of the ladder's full solves (relative): with 19 loops the
-/// finite-difference tangent stalls between 1e-9 and 1e-8 of the force scale at the larger
-/// loads (as `LADDER_STATIC_TOLERANCE` in `xtask/src/forks.rs`).
-const LADDER_STATIC_TOLERANCE: f64 = 1e-7;
+/// Newton tolerance of the ladder's full solves (relative): the default since the statics
+/// have their exact tangent (the finite-difference tangent once stalled between 1e-9 and 1e-8
+/// of the force scale at the larger loads, and this was 1e-7).
+const LADDER_STATIC_TOLERANCE: f64 = crate::tol::STATIC_RESIDUAL_REL;
 
 /// Parts each span between samples is split into for the sweep (4: quarter points and the
 /// midpoint, where the blend is weakest).

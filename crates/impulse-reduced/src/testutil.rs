@@ -388,3 +388,80 @@ pub fn lever_angle(k: f64) -> f64 {
 
 /// Width (rad) at which [`lever_angle`]'s bisection stops.
 pub const BISECTION_TOL: f64 = 1e-15;
+
+/// A random spring ladder of `levels` levels (the hard family of the statics): two rails of
+/// ball-jointed posts, a hinge rung per level about an axis tilted up to ~6° from the
+/// ladder's normal, a top bar on two balls (the end effector); width 0.1–0.5 m, level height
+/// 0.05–0.2 m, every anchor jittered by up to 1 cm, compliances log-uniform over
+/// `1e-4 … 1e-1`. The tilts and jitters make the loops' closures nearly (not exactly)
+/// redundant: the KKT systems of the statics are near-singular.
+pub fn random_ladder(rng: &mut Xoshiro256PlusPlus, levels: usize) -> MechanismDesc {
+    let mut d = MechanismDesc::new(&format!("random-ladder-{levels}"));
+    let w = rng.random_range(0.1..0.5);
+    let h = rng.random_range(0.05..0.2);
+    let c = |rng: &mut Xoshiro256PlusPlus| [10f64.powf(rng.random_range(-4.0..-1.0))];
+    let jitter = |rng: &mut Xoshiro256PlusPlus| v3(rng, 0.01);
+    d.link(LinkDesc::new("base", [0.0; 3]));
+    for i in 0..levels {
+        let z = h * (i as f64 + 0.5);
+        for (name, x) in [("L", -w / 2.0), ("R", w / 2.0)] {
+            d.link(LinkDesc::new(&format!("{name}{i}"), [x, 0.0, z]).mass(0.1, [1e-3, 1e-3, 1e-4]));
+        }
+    }
+    let top = h * levels as f64;
+    d.link(LinkDesc::new("top", [0.0, 0.0, top]).mass(0.1, [1e-3, 1e-3, 1e-4]));
+    for i in 0..levels {
+        let z = h * i as f64;
+        let below = |s: &str| {
+            if i == 0 {
+                "base".to_owned()
+            } else {
+                format!("{s}{}", i - 1)
+            }
+        };
+        for (s, x) in [("L", -w / 2.0), ("R", w / 2.0)] {
+            let a = jitter(rng);
+            d.joint(
+                JointDesc::ball(
+                    &format!("rail_{s}{i}"),
+                    &below(s),
+                    &format!("{s}{i}"),
+                    [x + a[0], a[1], z + a[2]],
+                )
+                .compliance(&c(rng)),
+            );
+        }
+        let a = jitter(rng);
+        let axis = [10.0 * a[0], 1.0, 10.0 * a[2]];
+        d.joint(
+            JointDesc::hinge(
+                &format!("rung{i}"),
+                &format!("L{i}"),
+                &format!("R{i}"),
+                [a[0], a[1], z + h / 2.0 + a[2]],
+                axis,
+            )
+            .compliance(&c(rng)),
+        );
+    }
+    for (s, x) in [("L", -w / 2.0), ("R", w / 2.0)] {
+        let a = jitter(rng);
+        d.joint(
+            JointDesc::ball(
+                &format!("top_{s}"),
+                &format!("{s}{}", levels - 1),
+                "top",
+                [x + a[0], a[1], top + a[2]],
+            )
+            .compliance(&c(rng)),
+        );
+    }
+    d.end_effector("top");
+    d
+}
+
+/// A unit vector drawn uniformly from the sphere.
+pub fn random_direction(rng: &mut Xoshiro256PlusPlus) -> glam::DVec3 {
+    let u = unit(rng);
+    glam::DVec3::new(u[0], u[1], u[2])
+}

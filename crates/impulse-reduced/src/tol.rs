@@ -3,7 +3,8 @@
 //! literal inside an algorithm.
 
 /// Factor on the truncated-SVD threshold of FORK⁻¹S eq. 9, `ε = max(m, n)·‖A‖₂·ε_mach`
-/// (dimensionless).
+/// (dimensionless): the default of [`crate::Tsvd`] (`impulse reduce --tsvd` replaces it by a
+/// relative threshold).
 ///
 /// Eq. 9 bounds the round-off of one SVD of `A`. The matrices reduced here are sums of up to
 /// hundreds of congruences `Ad C Adᵀ`, whose accumulated round-off in structurally zero
@@ -11,8 +12,8 @@
 /// "until the rank matches the expected value". A factor of 10² puts the threshold at ~1e-13·‖A‖
 /// for 6×6 blocks: above that round-off, and below the smallest physical singular value met in
 /// the acceptance test (random trees with compliances over six decades reach 6e-12·‖C‖, which a
-/// factor of 10⁴ wrongly truncates). The rank is always checked against an independent count
-/// ([`crate::Error::Rank`]).
+/// factor of 10⁴ wrongly truncates). The end-effector rank is decided on the joints'
+/// compliance-weighted motions at the same threshold and reported ([`crate::rank`]).
 pub const TSVD_FACTOR: f64 = 1e2;
 
 /// Smallest accepted length of a joint axis before normalisation (the axis's own units, usually
@@ -26,25 +27,61 @@ pub const AXIS_MIN_NORM: f64 = 1e-9;
 /// bounding radius), moves a pose by less than 1e-14 of it.
 pub const STATIC_RESIDUAL_REL: f64 = 1e-9;
 
-/// Most Newton iterations of the nonlinear statics before reporting
-/// [`crate::Error::NoConvergence`] (load steps are added before Newton would need more).
-pub const STATIC_MAX_ITERATIONS: usize = 60;
+/// Most Newton iterations of the nonlinear statics per load increment before the increment
+/// is halved (with the exact tangent Newton converges in 3–8 iterations from the secant
+/// predictor on the bundled and random mechanisms; more means the increment is too large).
+pub const STATIC_MAX_ITERATIONS: usize = 30;
 
-/// Relative step of the central differences that form the Newton tangent of the nonlinear
-/// statics (dimensionless, times `1 + |θ|`): truncation ~h² ≈ 1e-12, rounding ~ε/h ≈ 2e-10 of
-/// the residual scale. The tangent's accuracy only sets the convergence rate, not the solution.
-pub const STATIC_FD_STEP: f64 = 1e-6;
-
-/// Smallest backtracking fraction of a Newton step in the nonlinear statics: below it the
-/// step is taken anyway (the merit function is then flat at round-off level).
+/// Smallest backtracking fraction of a Newton step in the nonlinear statics (and the full
+/// dynamics' Newton): below it the statics give up the load increment (and halve it); the
+/// dynamics take the step anyway (their merit is then flat at round-off level).
 pub const STATIC_MIN_STEP: f64 = 1.0 / 1024.0;
 
-/// Largest ratio `σ_{r+1}/σ_r` accepted at the rank `r` the joints give (dimensionless): the
-/// reduced matrices are truncated to that rank only when their spectrum has a clear gap there.
-/// Round-off directions of the walk sit 11–15 decades below the physical ones in the bundled
-/// and random mechanisms; the physical spectrum of a compliance spans at most the square of
-/// the compliance range. 1e-6 separates the two with room on both sides.
+/// Armijo's sufficient-decrease fraction of the statics' line search (dimensionless): a
+/// step is taken when the merit falls by at least this fraction of the decrease its slope
+/// predicts (the usual 1e-4: nearly any decrease).
+pub const STATIC_ARMIJO: f64 = 1e-4;
+
+/// Smallest load increment of the statics' continuation, as a fraction of the load path
+/// (dimensionless): below it no nearby equilibrium is followed (a limit point, or none) and
+/// the solve reports [`crate::Error::NoEquilibrium`]. 2⁻²⁰ ≈ 1e-6: twenty halvings.
+pub const STATIC_MIN_LOAD_STEP: f64 = 1.0 / 1_048_576.0;
+
+/// Largest change of a joint coordinate (rad, or lengths over 1 + the bounding radius) the
+/// statics' Newton corrector may make from the continuation's predictor before the load
+/// increment is halved: the secant predictor is exact to first order, so on the equilibrium
+/// branch the correction shrinks with the square of the increment; a larger one means Newton
+/// went to another equilibrium. 0.2 rad keeps the increments at a few per radian of
+/// deflection.
+pub const STATIC_MAX_CORRECTION: f64 = 0.2;
+
+/// Most load increments the statics' continuation takes before giving up (each at least
+/// [`STATIC_MIN_LOAD_STEP`] long, growing when Newton converges fast).
+pub const STATIC_MAX_LOAD_STEPS: usize = 2000;
+
+/// A load increment whose Newton iteration converged in at most this many iterations lets
+/// the next increment double (the secant predictor was good).
+pub const STATIC_FAST_ITERATIONS: usize = 4;
+
+/// Below this rotation angle (rad) the coefficients of the derivative of the SO(3) right
+/// Jacobian (the statics' exact tangent, `reference::tangent`) are evaluated by their Taylor
+/// series through t⁶ (truncation below 1e-15 relative at 0.1); above, by the closed forms,
+/// whose cancellation costs ~ε/t² relative (2e-14 at 0.1).
+pub const DJR_SERIES_ANGLE: f64 = 0.1;
+
+/// Largest ratio `σ_{r+1}/σ_r` at a rank cut that counts as a clear gap (dimensionless): a
+/// model whose end-effector cut (or a merge's) is less clear builds, with a
+/// [`crate::RankWarning::SmallGap`]; the accelerability and damping must have a clear gap at
+/// the compliance's rank ([`crate::Error::Rank`] otherwise). Round-off directions of the walk
+/// sit 11–15 decades below the physical ones in the bundled and random mechanisms; 1e-4
+/// separates the two with room on both sides.
 pub const RANK_GAP: f64 = 1e-4;
+
+/// Estimated relative accuracy of a model's stiffness `K = C⁺` (cond(C) times the measured
+/// round-off of C) above which the construction warns
+/// ([`crate::RankWarning::IllConditioned`]): a millionth, where the reduced model's own
+/// linearisation error at a relative displacement of 1e-3 starts to be of the same size.
+pub const STIFFNESS_ACCURACY_WARN: f64 = 1e-6;
 
 /// Projected Gauss–Seidel sweeps allowed per step (contacts of a few end effectors converge
 /// in tens of sweeps; the cap bounds the cost of a badly conditioned step).
@@ -71,13 +108,6 @@ pub const BLEND_STATIC_ITERATIONS: usize = 4000;
 /// Smallest relaxation factor β of the blended statics' substitution (dimensionless): halving
 /// stops here. The bundled mechanisms settle with β between 1/2 and 1/8 at the Fig. 7 loads.
 pub const BLEND_STATIC_MIN_RELAXATION: f64 = 1.0 / 64.0;
-
-/// Gap `σ_{r+1}/σ_r` required of a blended step's system matrix `M̄ + hD̄ + h²K̄` at the
-/// closest model's rank r (dimensionless): 1, no check. The matrix is truncated to rank r
-/// whatever its spectrum beyond: where the blended models' ranks differ, `M̄` and `K̄` have
-/// ranges that differ by the blend, and the singular values this adds past r belong to
-/// directions the closest model rules out (see `BlendedModel::step`).
-pub const BLEND_SYSTEM_GAP: f64 = 1.0;
 
 /// The blended statics stop when the end effectors move less than this in a pass (scaled
 /// twist norm, dimensionless: lengths over the bounding radius, angles over π).

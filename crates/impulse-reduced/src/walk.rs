@@ -57,6 +57,9 @@ pub struct MergeBlocks {
     /// `C_VV`: block (i, k) couples virtual links i and k (merged link's frame, eqs. 10, 12),
     /// every earlier merge applied.
     pub virtual_blocks: Vec<Vec<Mat6>>,
+    /// The truncated SVD of the weld's `B C_VV Bᵀ` (eqs. 13–14 in compliance form): its
+    /// dropped singular values are the loop's redundant constraints.
+    pub report: crate::rank::RankReport,
 }
 
 /// Per-joint input of the walk: the joint's body-frame motion columns in the child frame
@@ -190,11 +193,18 @@ pub fn walk(
             // Chain (eq. 10).
             (cdv.iter().map(|v| v[0]).collect::<Vec<_>>(), cvv[0][0])
         } else {
-            let welded = merge(&mut st, &cdv, &cvv, tsvd)?;
+            let (welded, report) = merge(&mut st, &cdv, &cvv, tsvd)?;
             merges.push(MergeBlocks {
                 link: c,
                 joints: ins.clone(),
                 virtual_blocks: cvv,
+                report: crate::rank::RankReport::new(
+                    format!("merge at link `{}` (B·C_VV·Bᵀ)", m.links[c].name),
+                    (report.singular.len(), report.singular.len()),
+                    report.singular,
+                    report.threshold,
+                    report.rank,
+                ),
             });
             welded
         };
@@ -253,13 +263,13 @@ pub fn walk(
 
 /// The merge of eqs. 13–14 in compliance form: welds the virtual links together and updates
 /// every stored coupling. Returns the merged link's column against the visited links and its
-/// own block.
+/// own block, and the truncated SVD of the weld.
 fn merge(
     st: &mut State,
     cdv: &[Vec<Mat6>],
     cvv: &[Vec<Mat6>],
     tsvd: Tsvd,
-) -> Result<(Vec<Mat6>, Mat6), Error> {
+) -> Result<((Vec<Mat6>, Mat6), crate::linalg::Pinv), Error> {
     let nv = cvv.len();
     let k = nv - 1;
     // u_x = C_{x,V} Bᵀ with B's row block r: φ_{v0} − φ_{v(r+1)}.
@@ -275,7 +285,8 @@ fn merge(
     }
     // Symmetrise against round-off before the SVD.
     let s = Mat::from_fn(6 * k, 6 * k, |i, j| 0.5 * (s[(i, j)] + s[(j, i)]));
-    let p = pinv_scaled(s.as_ref(), tsvd, st.scale)?.inverse;
+    let weld = pinv_scaled(s.as_ref(), tsvd, st.scale)?;
+    let p = &weld.inverse;
     let pb: Vec<Vec<Mat6>> = (0..k)
         .map(|r| {
             (0..k)
@@ -323,5 +334,5 @@ fn merge(
         let dd = corr(&y_vis[di], &u_vis[di]);
         st.diagonal[d] = st.diagonal[d] - dd;
     }
-    Ok((col, cc))
+    Ok(((col, cc), weld))
 }

@@ -4,6 +4,7 @@
 //! in a fixed order. A case's name is also its snapshot file name in `fixtures/snapshots/`, so
 //! names are unique and stable (ASCII letters, digits, `-`, `_`, `.`).
 
+mod forks;
 mod massprops;
 mod poses;
 pub mod scenes;
@@ -16,5 +17,6 @@ pub fn all() -> Vec<Case> {
     cases.extend(massprops::cases());
     cases.extend(poses::cases());
     cases.extend(scenes::cases());
+    cases.extend(forks::cases());
     cases
 }

@@ -16,9 +16,19 @@ use faer::Mat;
 use impulse_geom::{Mat6, Pose, Twist, Wrench};
 
 use crate::error::Error;
-use crate::linalg::{Tsvd, null_space, pinv};
+use crate::linalg::{Tsvd, pinv};
 use crate::mechanism::Mechanism;
 use crate::reference::kinematics::{Configuration, body_jacobian, link_poses, loop_jacobian};
+
+/// A symmetric positive definite joint-space matrix (ndof × ndof): diagonal (per-coordinate
+/// stiffness or damping) or dense (the mass matrix).
+#[derive(Copy, Clone, Debug)]
+pub enum JointMatrix<'a> {
+    /// Its diagonal.
+    Diagonal(&'a [f64]),
+    /// The whole matrix.
+    Dense(&'a Mat<f64>),
+}
 
 /// The linearised statics about one configuration.
 #[derive(Clone, Debug)]
@@ -33,6 +43,14 @@ pub struct LinearStatics {
     pub null_space: Mat<f64>,
     /// Constrained joint-space compliance `C_θ = Z (Zᵀ K_q Z)⁻¹ Zᵀ` (ndof × ndof).
     pub joint_compliance: Mat<f64>,
+    /// With loops, a factor `F = Z (Zᵀ K_q Z)^(−½)` of `C_θ = F Fᵀ` (ndof × nz); a tree's is
+    /// `diag(√c)`, not stored.
+    factor: Option<Mat<f64>>,
+    /// Per coordinate, its compliance.
+    compliances: Vec<f64>,
+    /// The truncated SVD of the loop closure's Jacobian G (its null space Z), when there are
+    /// loops.
+    pub closure_report: Option<crate::rank::RankReport>,
 }
 
 impl LinearStatics {
@@ -60,20 +78,42 @@ impl LinearStatics {
             .iter()
             .flat_map(|j| j.compliance.iter().copied())
             .collect();
-        let (z, joint_compliance) = if nl == 0 {
+        let (z, joint_compliance, factor, closure_report) = if nl == 0 {
             // A tree: Z = I and C_θ = diag(c).
             (
                 Mat::<f64>::identity(m.ndof, m.ndof),
                 Mat::from_fn(m.ndof, m.ndof, |a, b| if a == b { c[a] } else { 0.0 }),
+                None,
+                None,
             )
         } else {
-            let z = null_space(g.as_ref(), tsvd)?;
+            let (z, report) = null_space_report(g.as_ref(), tsvd)?;
             // Zᵀ K_q Z, symmetric positive definite (K_q is).
             let kz_half = Mat::from_fn(m.ndof, z.ncols(), |i, a| z[(i, a)] / c[i].sqrt());
             let kz = kz_half.transpose() * &kz_half;
             let cz = pinv(kz.as_ref(), tsvd)?.inverse;
             let jc = &z * &cz * z.transpose();
-            (z, jc)
+            // F = Z U Λ^½ from the eigen-decomposition U Λ Uᵀ of (Zᵀ K_q Z)⁻¹: F Fᵀ = C_θ
+            // (none when the loops lock every joint: faer's eigensolver does not take a 0×0
+            // matrix).
+            let nz = cz.nrows();
+            let f = if nz == 0 {
+                Mat::zeros(m.ndof, 0)
+            } else {
+                let evd = cz
+                    .self_adjoint_eigen(faer::Side::Lower)
+                    .map_err(|e| Error::LinearAlgebra(format!("eigen of (Zᵀ K Z)⁻¹: {e:?}")))?;
+                let (s, u) = (evd.S(), evd.U());
+                let mut f = &z * u;
+                for k in 0..nz {
+                    let h = s[k].max(0.0).sqrt();
+                    for x in f.col_as_slice_mut(k) {
+                        *x *= h;
+                    }
+                }
+                f
+            };
+            (z, jc, Some(f), Some(report))
         };
         Ok(LinearStatics {
             config: q.clone(),
@@ -81,6 +121,9 @@ impl LinearStatics {
             jacobians,
             null_space: z,
             joint_compliance,
+            factor,
+            compliances: c,
+            closure_report,
         })
     }
 
@@ -108,6 +151,73 @@ impl LinearStatics {
         Mat::from_fn(6 * links.len(), ndof, |r, c| {
             self.jacobians[links[r / 6]][(r % 6, c)]
         })
+    }
+
+    /// The joints' compliance-weighted motions of `links`, `W = J_E F` with `F Fᵀ = C_θ`
+    /// (6|links| × nz): `J_E C_θ J_Eᵀ = W Wᵀ`, so the compliance's singular values are the
+    /// squares of W's, which W gives to ε of its largest ([`crate::rank`]).
+    #[must_use]
+    pub fn weighted_motions(&self, links: &[usize]) -> Mat<f64> {
+        let je = self.stacked(links);
+        match &self.factor {
+            Some(f) => je * f,
+            None => Mat::from_fn(je.nrows(), je.ncols(), |r, k| {
+                je[(r, k)] * self.compliances[k].sqrt()
+            }),
+        }
+    }
+
+    /// `V = J_E Z (Zᵀ Q Z)^(−½)` for a symmetric positive definite joint-space matrix Q (the
+    /// joint damping `D_q`, the mass matrix `M_q`): the factor of the end-effector map
+    /// `J_E Z (Zᵀ Q Z)⁻¹ Zᵀ J_Eᵀ = V Vᵀ` (damping compliance, accelerability), whose singular
+    /// values V gives to ε of its largest.
+    ///
+    /// # Errors
+    /// [`Error::LinearAlgebra`] if the eigen-decomposition fails or `Zᵀ Q Z` is not positive
+    /// definite.
+    pub fn factor_motions(&self, links: &[usize], q: JointMatrix<'_>) -> Result<Mat<f64>, Error> {
+        let je = self.stacked(links);
+        let z = &self.null_space;
+        if let (JointMatrix::Diagonal(d), None) = (&q, &self.factor) {
+            // A tree: Z = I.
+            return Ok(Mat::from_fn(je.nrows(), je.ncols(), |r, k| {
+                je[(r, k)] / d[k].sqrt()
+            }));
+        }
+        let tree = self.factor.is_none();
+        let zqz = match q {
+            // A tree: Z = I.
+            JointMatrix::Dense(qm) if tree => qm.clone(),
+            JointMatrix::Diagonal(d) => {
+                z.transpose() * Mat::from_fn(z.nrows(), z.ncols(), |i, a| d[i] * z[(i, a)])
+            }
+            JointMatrix::Dense(qm) => z.transpose() * (qm * z),
+        };
+        let nz = zqz.nrows();
+        if nz == 0 {
+            return Ok(Mat::zeros(je.nrows(), 0));
+        }
+        let evd = zqz
+            .self_adjoint_eigen(faer::Side::Lower)
+            .map_err(|e| Error::LinearAlgebra(format!("eigen of Zᵀ Q Z: {e:?}")))?;
+        let (s, u) = (evd.S(), evd.U());
+        if (0..nz).any(|k| s[k].is_nan() || s[k] <= 0.0) {
+            return Err(Error::LinearAlgebra(
+                "a joint-space mass or damping matrix is not positive definite on the \
+                 admissible motions"
+                    .to_owned(),
+            ));
+        }
+        // V = J_E Z U Λ^(−½): V Vᵀ = J_E Z (Zᵀ Q Z)⁻¹ Zᵀ J_Eᵀ (any orthogonal factor on the
+        // right leaves V Vᵀ and V's singular values unchanged).
+        let mut v = if tree { je * u } else { je * z * u };
+        for k in 0..nz {
+            let f = 1.0 / s[k].sqrt();
+            for x in v.col_as_slice_mut(k) {
+                *x *= f;
+            }
+        }
+        Ok(v)
     }
 
     /// Joint deflection `δθ = C_θ J_Eᵀ w` under body wrenches `w` on `links`.
@@ -164,4 +274,40 @@ impl LinearStatics {
         let jz = self.stacked(links) * z;
         Ok(&jz * &inv * jz.transpose())
     }
+}
+
+/// The null space of the loop closure's Jacobian `g` (as [`crate::linalg::null_space`]) and
+/// the report of its truncated SVD.
+fn null_space_report(
+    g: faer::MatRef<'_, f64>,
+    tsvd: Tsvd,
+) -> Result<(Mat<f64>, crate::rank::RankReport), Error> {
+    let (m, n) = (g.nrows(), g.ncols());
+    for j in 0..n {
+        for i in 0..m {
+            if !g[(i, j)].is_finite() {
+                return Err(Error::LinearAlgebra(format!(
+                    "entry ({i}, {j}) of the loop closure's Jacobian is not finite"
+                )));
+            }
+        }
+    }
+    let svd = g
+        .svd()
+        .map_err(|e| Error::LinearAlgebra(format!("SVD of a {m}×{n} matrix: {e:?}")))?;
+    let (s, v) = (svd.S(), svd.V());
+    let k = m.min(n);
+    let values: Vec<f64> = (0..k).map(|i| s[i]).collect();
+    let sigma_max = values.iter().fold(0.0_f64, |a, &x| a.max(x));
+    let threshold = tsvd.threshold(m, n, sigma_max);
+    let r = values.iter().filter(|&&x| x > threshold).count();
+    let z = Mat::from_fn(n, n - r, |i, j| v[(i, r + j)]);
+    let report = crate::rank::RankReport::new(
+        "loop closure G (its null space: the admissible joint motions)",
+        (m, n),
+        values,
+        threshold,
+        r,
+    );
+    Ok((z, report))
 }

@@ -10,14 +10,17 @@
 //! - [`dynamics`]: the full nonlinear dynamics, backward Euler in joint coordinates (free base
 //!   included) with loop closure at position level, solved by Newton;
 //! - [`statics`]: the nonlinear static equilibrium under end-effector loads, by Newton on the
-//!   force balance with loop-closure constraints (KKT, truncated SVD for redundant loops).
+//!   force balance with loop-closure constraints (KKT, truncated SVD for redundant loops);
+//! - `tangent`: the statics' equations and their exact Newton tangent (second-order
+//!   kinematics from the joints' spatial screws).
 
 pub mod dynamics;
 pub mod kinematics;
 pub mod linear;
 pub mod statics;
+pub(crate) mod tangent;
 
 pub use dynamics::{FullOptions, FullSim, FullStepReport};
 pub use kinematics::{Configuration, joint_motion};
-pub use linear::LinearStatics;
+pub use linear::{JointMatrix, LinearStatics};
 pub use statics::{Load, StaticOptions, StaticSolution, solve_statics};
