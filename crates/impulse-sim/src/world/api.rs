@@ -214,6 +214,7 @@ impl World {
             (self.slots.len() - 1) as u32
         };
         self.names.insert(name, i);
+        self.expire_box(i);
         i
     }
 

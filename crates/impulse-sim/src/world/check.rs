@@ -725,7 +725,8 @@ impl World {
             self.expire_box(b);
             let x = self.b(b);
             let (v, a) = (x.velocity, x.acceleration(g));
-            if x.far.is_some_and(|f| !f.holds(t, v, a)) {
+            let held = self.islands.held.holds_body(b);
+            if x.far.is_some_and(|f| !f.holds(t, v, a, held)) {
                 self.b_mut(b).far = None;
             }
         }
@@ -739,6 +740,7 @@ impl World {
         pairs.sort_unstable();
         pairs.dedup();
         for p in pairs {
+            if self.far_keyed.contains(&p) {}
             let key = self.bound(p)?;
             self.heap
                 .set_toi(p, key)

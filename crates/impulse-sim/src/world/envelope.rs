@@ -147,9 +147,11 @@ impl FarEnvelope {
         self.speed + self.accel * (t - self.since).max(0.0)
     }
 
-    /// Whether a centre moving at `v` with acceleration `a` at time `t` is inside.
-    pub(crate) fn holds(&self, t: f64, v: DVec3, a: DVec3) -> bool {
-        v.length() <= self.speed_at(t) && a.length() <= self.accel
+    /// Whether a centre moving at `v` with acceleration `a` at time `t` is inside. A body an
+    /// island holds (`held`) is checked for speed alone: its island step checks the speed its
+    /// held load reaches within each step, however large the load.
+    pub(crate) fn holds(&self, t: f64, v: DVec3, a: DVec3, held: bool) -> bool {
+        v.length() <= self.speed_at(t) && (held || a.length() <= self.accel)
     }
 
     /// The envelope about `b`'s motion now ([`FarEnvelope::about`]) when this one is more than
@@ -165,22 +167,20 @@ impl FarEnvelope {
     }
 
     /// An envelope about `b`'s current motion at time `t` (gravity `g`): twice its speed and
-    /// acceleration ([`ENVELOPE_GROWTH`]), at least the floors, and every acceleration of its
-    /// load envelope (an island step inside that one re-keys nothing, so this one must hold
-    /// through it).
+    /// its free acceleration ([`ENVELOPE_GROWTH`]), at least the floors. The acceleration
+    /// bound is for the body in free flight; an island's held load may exceed it (its island
+    /// step checks speeds instead).
     pub(crate) fn about(b: &Body, t: f64, g: DVec3) -> FarEnvelope {
         let (v, a) = if b.asleep {
             (0.0, 0.0)
         } else {
-            (b.velocity.length(), b.acceleration(g).length())
+            let free = g + b.mass.map_or(DVec3::ZERO, |m| b.force / m.mass);
+            (b.velocity.length(), free.length())
         };
-        let loads = b.envelope.map_or(0.0, |e| e.accel.length() + e.accel_pad);
         FarEnvelope {
             since: t,
             speed: (ENVELOPE_GROWTH * v).max(FAR_SPEED_FLOOR * (g.length() * b.r_max).sqrt()),
-            accel: (ENVELOPE_GROWTH * a)
-                .max(FAR_ACCEL_FLOOR * g.length())
-                .max(loads),
+            accel: (ENVELOPE_GROWTH * a).max(FAR_ACCEL_FLOOR * g.length()),
         }
     }
 }

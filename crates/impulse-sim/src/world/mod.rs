@@ -47,6 +47,7 @@ mod api;
 mod check;
 mod control;
 pub(crate) mod envelope;
+mod held;
 mod held_links;
 mod hold;
 mod hybrid;
@@ -433,6 +434,8 @@ pub struct World {
     /// The heap pairs whose key was computed from their bounding spheres and their bodies'
     /// far envelopes ([`World::far_bound`]): they keep it while both envelopes hold.
     far_keyed: rustc_hash::FxHashSet<(u32, u32)>,
+    /// When each moving body's box in the broad phase expires, earliest first (`sync.rs`).
+    box_queue: std::collections::BinaryHeap<std::cmp::Reverse<(u64, u32)>>,
     counters: Counters,
     stalled_checks: u64,
     /// Stalls broken since time last advanced.
@@ -533,6 +536,7 @@ impl World {
             hash: None,
             pairs: FxHashMap::default(),
             far_keyed: rustc_hash::FxHashSet::default(),
+            box_queue: std::collections::BinaryHeap::new(),
             counters: Counters {
                 min_distance: f64::INFINITY,
                 ..Counters::default()

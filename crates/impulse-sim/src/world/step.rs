@@ -296,32 +296,31 @@ impl World {
     /// Halves the step while a box would cover too many tiles even over the step alone.
     fn refresh_boxes(&mut self, t0: f64, t_end: &mut f64) -> Result<(), SimError> {
         let (g, eps) = (self.gravity, self.collision_epsilon());
-        'boxes: loop {
-            for i in 0..self.slots.len() as u32 {
-                let Some(b) = &self.slots[i as usize].body else {
-                    continue;
-                };
-                // A sleeping body does not move: its box stays the one it fell asleep with,
-                // as a fixed body's does.
-                if b.kind == BodyKind::Fixed || b.asleep {
-                    continue;
-                }
-                let link = b.is_link();
-                if !link && b.box_until >= *t_end {
-                    continue;
-                }
-                if !link {
-                    self.sync(i)?;
-                }
-                let b = self.b(i);
-                let motion = b.motion(g);
-                if let Motion::Unbounded { .. } = motion {
-                    return Err(self.runtime(format!(
-                        "body {}: its motion cannot be bounded (velocity {}, angular velocity {})",
-                        b.name, b.velocity, b.omega
-                    )));
-                }
-                let grow = b.r_max + eps;
+        for i in self.boxes_expiring(*t_end) {
+            let Some(b) = &self.slots[i as usize].body else {
+                continue;
+            };
+            // A sleeping body does not move: its box stays the one it fell asleep with, as a
+            // fixed body's does (waking expires it).
+            if b.kind == BodyKind::Fixed || b.asleep {
+                continue;
+            }
+            let link = b.is_link();
+            if !link {
+                self.sync(i)?;
+            }
+            let b = self.b(i);
+            let motion = b.motion(g);
+            if let Motion::Unbounded { .. } = motion {
+                return Err(self.runtime(format!(
+                    "body {}: its motion cannot be bounded (velocity {}, angular velocity {})",
+                    b.name, b.velocity, b.omega
+                )));
+            }
+            let grow = b.r_max + eps;
+            // Over the horizon, else over the step alone, else over half the step (for every
+            // body after it too: a box made for a longer step covers a shorter one).
+            loop {
                 let step = *t_end - t0;
                 let long = if link {
                     step
@@ -347,13 +346,11 @@ impl World {
                 match covered {
                     Some(span) => {
                         if !link {
-                            self.b_mut(i).box_until = t0 + span;
+                            self.set_box_until(i, t0 + span);
                         }
+                        break;
                     }
-                    None if step > 0.0 => {
-                        *t_end = t0 + 0.5 * step;
-                        continue 'boxes;
-                    }
+                    None if step > 0.0 => *t_end = t0 + 0.5 * step,
                     None => {
                         return Err(self.runtime(format!(
                             "broad phase, body {}: its box covers too many tiles",
@@ -362,8 +359,8 @@ impl World {
                     }
                 }
             }
-            return Ok(());
         }
+        Ok(())
     }
 
     /// Inserts every pair that became close (thesis §2.4.3, 0→1) into the heap.

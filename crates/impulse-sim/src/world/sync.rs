@@ -38,6 +38,16 @@ use crate::error::SimError;
 /// Default `1e-3`.
 pub const BOX_HORIZON: f64 = 1e-3;
 
+/// A time as a key that orders as the time does (every f64 but NaN, both signs, ±∞).
+pub(super) fn order_key(t: f64) -> u64 {
+    let bits = t.to_bits();
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | (1 << 63)
+    }
+}
+
 /// Whether `b` moves of itself between events, and so may lag behind the world's time.
 fn lags(b: &Body) -> bool {
     matches!(b.kind, BodyKind::Dynamic | BodyKind::Scripted) && !b.asleep
@@ -145,13 +155,47 @@ impl World {
         let b = self.b_mut(i);
         b.asleep = false;
         b.synced = t;
-        b.box_until = f64::NEG_INFINITY;
         // Its far pairs' keys counted on it not moving.
         b.far = None;
+        self.expire_box(i);
     }
 
     /// Body `i`'s motion changed: its box in the broad phase is replaced at the next step.
     pub(super) fn expire_box(&mut self, i: u32) {
-        self.b_mut(i).box_until = f64::NEG_INFINITY;
+        self.set_box_until(i, f64::NEG_INFINITY);
+    }
+
+    /// Body `i`'s box covers its motion up to `t`; the loop replaces it once it passes `t`
+    /// (the queue of expiries: an entry whose time is no longer the body's is skipped).
+    pub(super) fn set_box_until(&mut self, i: u32, t: f64) {
+        self.b_mut(i).box_until = t;
+        self.box_queue.push(std::cmp::Reverse((order_key(t), i)));
+    }
+
+    /// The bodies whose boxes do not cover up to `t_end`, in slot order, and every link (a
+    /// multibody's check reads its link boxes of every step); taken off the queue.
+    pub(super) fn boxes_expiring(&mut self, t_end: f64) -> Vec<u32> {
+        let end = order_key(t_end);
+        let mut due = Vec::new();
+        while let Some(&std::cmp::Reverse((k, i))) = self.box_queue.peek() {
+            if k >= end {
+                break;
+            }
+            self.box_queue.pop();
+            let current = self
+                .slots
+                .get(i as usize)
+                .and_then(|s| s.body.as_ref())
+                .is_some_and(|b| order_key(b.box_until) == k && !b.is_link() && lags(b));
+            if current {
+                due.push(i);
+            }
+        }
+        for m in &self.multibodies {
+            due.extend(m.links.iter().map(|&(_, slot)| slot));
+        }
+        due.sort_unstable();
+        due.dedup();
+        due
     }
 }

@@ -390,3 +390,32 @@ fn a_rim_slapping_down_does_not_dip_through_the_plate_within_a_step() {
         r.worst
     );
 }
+
+/// A coin resting on the plate by two rim points, slow by itself, in the island of another
+/// coin tumbling on it: the island steps at the fast pair's rate (1 ms) and the step's load
+/// turned the resting coin, whose far rim went 1.3 ε_c into the plate within the step (its
+/// pair had no speculative points: only fast pairs get them). The turning check after each
+/// solve now covers the slow pairs of a fast island too. The bundled coins with the rollers'
+/// spin about the vertical scaled by 1.0045; judge: the independent monitor at every loop step.
+#[test]
+fn a_slow_pair_in_a_fast_island_is_checked_for_its_own_turning() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/scenes/coins.ron");
+    let mut scene = Scene::read(&path).expect("the bundled coins");
+    for body in &mut scene.desc.bodies {
+        if body.name.starts_with("roller") {
+            body.angular_velocity[2] *= 1.0045;
+        }
+    }
+    let eps = scene.desc.collision_epsilon;
+    let mut world = World::from_scene(&scene).expect("a valid scene");
+    world.set_checking(true);
+    crate::record::run(&mut world, 0.3, scene.desc.output_rate, |_| {}).expect("runs");
+    let r = world.checked_penetration().expect("checking");
+    assert!(
+        r.max_depth <= eps,
+        "overlap {:.2} ε_c at {:?}",
+        r.max_depth / eps,
+        r.worst
+    );
+}
