@@ -740,7 +740,6 @@ impl World {
         pairs.sort_unstable();
         pairs.dedup();
         for p in pairs {
-            if self.far_keyed.contains(&p) {}
             let key = self.bound(p)?;
             self.heap
                 .set_toi(p, key)
