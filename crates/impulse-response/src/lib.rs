@@ -51,7 +51,8 @@ pub use body::{
     Body, ContactFrame, collision_matrix_world, cross_matrix, relative_contact_velocity,
 };
 pub use contact::{
-    Contact, IslandBody, Member, SolveReport, SolverSettings, System, solve_contacts, solve_island,
+    Contact, DEFAULT_ACCELERATION, IslandBody, Member, SolveReport, SolverSettings, System,
+    solve_contacts, solve_island,
 };
 pub use integrate::{
     Mode, Parameter, Phase, Response, ResponseKind, Restitution, Settings, Stats, Sticking,

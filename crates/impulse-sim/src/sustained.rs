@@ -131,6 +131,10 @@ pub struct SustainedSettings {
     /// Sweeps without convergence after which the solver tries a direct solve on the active
     /// set (`impulse_response::contact`: tall stacks). Default `20`.
     pub direct_after: usize,
+    /// Past iterates mixed into each accelerated sweep of an island solve
+    /// (`impulse_response::SolverSettings::acceleration`, Anderson's mixing); 0 for plain
+    /// projected Gauss–Seidel. Default [`impulse_response::DEFAULT_ACCELERATION`].
+    pub acceleration: usize,
 }
 
 /// Default island step (s): 1 ms.
@@ -172,6 +176,7 @@ impl Default for SustainedSettings {
             max_sweeps: 200,
             solver_tolerance_factor: 1e-4,
             direct_after: 20,
+            acceleration: impulse_response::DEFAULT_ACCELERATION,
         }
     }
 }

@@ -33,6 +33,16 @@
 //! It stops when no impulse update changed a contact velocity by more than
 //! [`SolverSettings::tolerance`], or after [`SolverSettings::max_iterations`] sweeps.
 //!
+//! **Acceleration** (`anderson.rs`, [`SolverSettings::acceleration`]): between sweeps, the
+//! last few iterates' residuals propose an impulse vector their linear model says is nearer
+//! the fixed point; it is projected onto the cones and the velocities rebuilt from it, and the
+//! next sweep judges it (a worse sweep drops the history; a solve that stops making progress
+//! goes on with plain sweeps). The stopping test and the fixed point are the plain sweep's, so
+//! a converged solve obeys the same laws (test
+//! `random_islands_obey_complementarity_coulomb_and_dissipation` runs both); a cold stack of
+//! 8 converges in 245 sweeps instead of 10 855 (test
+//! `acceleration_reaches_the_stack_solution_in_fewer_sweeps`).
+//!
 //! **Warm starting**: the impulses in [`Contact::impulse`] on entry (e.g. last step's, carried
 //! over by the manifold's feature ids) are projected onto the cone and applied before the
 //! first sweep; on return they hold the solution.
@@ -62,6 +72,7 @@ use glam::{DMat3, DVec2, DVec3};
 
 use crate::{Body, ContactFrame, ResponseError, collision_matrix_world};
 
+mod anderson;
 mod direct;
 mod system;
 #[cfg(test)]
@@ -69,6 +80,7 @@ mod system_tests;
 #[cfg(test)]
 mod tests;
 
+pub use anderson::{MIXING_RIDGE, PROGRESS, STALL_SWEEPS_PER_MEMORY};
 pub use direct::{DENSE_UP_TO, LAW_SLACK, MAX_ROUNDS, REGULARISATION};
 use system::{LinkRows, Membership};
 pub use system::{Member, System};
@@ -132,6 +144,10 @@ pub struct SolverSettings {
     /// attempt costs up to 2·[`MAX_ROUNDS`] factorisations). `None` (the default): sweeps
     /// only.
     pub direct_after: Option<usize>,
+    /// Anderson acceleration of the sweeps (`anderson.rs`): how many past iterates mix into
+    /// each proposal; 0 for plain sweeps. Not taken for islands with [`System`]s. Default
+    /// [`DEFAULT_ACCELERATION`].
+    pub acceleration: usize,
 }
 
 impl Default for SolverSettings {
@@ -140,9 +156,17 @@ impl Default for SolverSettings {
             max_iterations: DEFAULT_MAX_ITERATIONS,
             tolerance: DEFAULT_TOLERANCE,
             direct_after: None,
+            acceleration: DEFAULT_ACCELERATION,
         }
     }
 }
+
+/// Default [`SolverSettings::acceleration`]: five past iterates. On the 216-box pile
+/// (`cargo xtask bench --scale`, one run each) memories of 3, 5 and 8 cut the sweeps from
+/// 2.20 million to 1.06, 0.70 and 0.65 million, the solves stopped at the cap from 8682 to
+/// 3385, 1872 and 1520; five is where the sweeps stop falling faster than a proposal's
+/// cost grows.
+pub const DEFAULT_ACCELERATION: usize = 5;
 
 /// Default [`SolverSettings::max_iterations`].
 pub const DEFAULT_MAX_ITERATIONS: usize = 1000;
@@ -276,6 +300,16 @@ pub fn solve_island(
             b.omega = DVec3::ZERO;
         }
     }
+    let memory = settings.acceleration;
+    let mut accel = (memory > 0 && systems.is_empty() && contacts.len() > 1)
+        .then(|| anderson::Anderson::new(memory, 3 * contacts.len()));
+    // The velocities without any contact impulse: an accelerated proposal's are these plus
+    // its impulses.
+    let start: Vec<(DVec3, DVec3)> = if accel.is_some() {
+        bodies.iter().map(|b| (b.velocity, b.omega)).collect()
+    } else {
+        Vec::new()
+    };
     // Warm start: last impulses, projected onto the cone.
     for (c, row) in contacts.iter_mut().zip(&rows) {
         let p_n = c.impulse.z.max(0.0);
@@ -293,6 +327,23 @@ pub fn solve_island(
         direct: false,
         direct_tried: false,
     };
+    // The impulses before and after a sweep, and a proposal, three numbers a contact.
+    let buffer = |on: bool| vec![0.0; if on { 3 * contacts.len() } else { 0 }];
+    let (mut before, mut after, mut proposal, mut kept) = (
+        buffer(accel.is_some()),
+        buffer(accel.is_some()),
+        buffer(accel.is_some()),
+        buffer(accel.is_some()),
+    );
+    // The sweep output of least residual: an accelerated solve that ends unconverged returns
+    // it rather than wherever the last proposal led (a plain sweep's creep is monotone in
+    // practice; an extrapolation's path is not).
+    let mut kept_residual = f64::INFINITY;
+    flatten(contacts, &mut before);
+    let mut last_residual = f64::INFINITY;
+    let mut proposed = false;
+    let (mut best_residual, mut best_at) = (f64::INFINITY, 0);
+    let stall_after = anderson::STALL_SWEEPS_PER_MEMORY * memory.max(1);
     while !report.converged && report.iterations < settings.max_iterations {
         let mut residual_squared = 0.0_f64;
         for (c, row) in contacts.iter_mut().zip(&rows) {
@@ -308,7 +359,56 @@ pub fn solve_island(
         {
             report.direct_tried = true;
             report.direct = direct::solve_active_set(bodies, contacts, &rows, settings.tolerance);
+            if let Some(a) = &mut accel {
+                a.restart();
+                flatten(contacts, &mut before);
+                proposed = false;
+                last_residual = f64::INFINITY;
+                kept_residual = f64::INFINITY;
+                continue;
+            }
         }
+        if report.converged {
+            break;
+        }
+        if !kept.is_empty() && residual < kept_residual {
+            kept_residual = residual;
+            flatten(contacts, &mut kept);
+        }
+        if report.iterations == settings.max_iterations {
+            break;
+        }
+        if residual < best_residual * anderson::PROGRESS {
+            best_residual = residual;
+            best_at = report.iterations;
+        } else if report.iterations - best_at > stall_after {
+            // No progress under acceleration: plain sweeps from here.
+            accel = None;
+        }
+        // With a direct solve to come, the sweeps before it are plain: it takes their active
+        // set (measured: accelerated from the first sweep, a dropped stack of 16 that the
+        // direct solve settles did not sleep within 2 s, test
+        // `a_dropped_stack_of_sixteen_settles_and_sleeps`).
+        let direct_pending = settings.direct_after.is_some_and(|d| report.iterations < d);
+        if let Some(a) = accel.as_mut().filter(|_| !direct_pending) {
+            if proposed && residual > last_residual {
+                a.restart();
+            }
+            last_residual = residual;
+            flatten(contacts, &mut after);
+            if a.propose(&before, &after, &mut proposal) {
+                set_impulses(bodies, contacts, &rows, &start, &proposal);
+                flatten(contacts, &mut before);
+                proposed = true;
+            } else {
+                std::mem::swap(&mut before, &mut after);
+                proposed = false;
+            }
+        }
+    }
+    if !report.converged && kept_residual < report.residual {
+        set_impulses(bodies, contacts, &rows, &start, &kept);
+        report.residual = kept_residual;
     }
     if contacts.is_empty() {
         report.residual = 0.0;
@@ -317,6 +417,36 @@ pub fn solve_island(
         s.write_members(bodies);
     }
     Ok(report)
+}
+
+/// Sets the contacts' impulses to `impulses` (three numbers each), projected onto their
+/// cones, and the bodies' velocities to `start` (without contact impulses) plus their effect
+/// (rigid bodies only: an accelerated solve has no systems).
+fn set_impulses(
+    bodies: &mut [IslandBody],
+    contacts: &mut [Contact],
+    rows: &[Row],
+    start: &[(DVec3, DVec3)],
+    impulses: &[f64],
+) {
+    for (b, (v, w)) in bodies.iter_mut().zip(start) {
+        b.velocity = *v;
+        b.omega = *w;
+    }
+    for ((c, row), p) in contacts.iter_mut().zip(rows).zip(impulses.chunks_exact(3)) {
+        let p_n = p[2].max(0.0);
+        let p_t = clamp_to_disk(DVec2::new(p[0], p[1]), c.friction * p_n);
+        c.impulse = DVec3::new(p_t.x, p_t.y, p_n);
+        apply(bodies, c, row, c.impulse);
+    }
+}
+
+/// Writes the contacts' impulses into `out`, three numbers each (nothing if `out` is empty:
+/// a solve without acceleration keeps no copies).
+fn flatten(contacts: &[Contact], out: &mut [f64]) {
+    for (c, o) in contacts.iter().zip(out.chunks_exact_mut(3)) {
+        o.copy_from_slice(&[c.impulse.x, c.impulse.y, c.impulse.z]);
+    }
 }
 
 /// One contact's update (normal row, then the friction disk); returns the square of the

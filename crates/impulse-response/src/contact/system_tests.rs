@@ -15,6 +15,7 @@ fn tight() -> SolverSettings {
         max_iterations: 200_000,
         tolerance: 1e-13,
         direct_after: None,
+        acceleration: 0,
     }
 }
 

@@ -595,6 +595,7 @@ impl World {
             },
             tolerance: (tolerance_factor * v_micro).max(f64::MIN_POSITIVE),
             direct_after: Some(settings.direct_after),
+            acceleration: settings.acceleration,
         };
         let key = island.bodies[0];
         let backoff = self.islands.direct_backoff.get(&key).copied();
