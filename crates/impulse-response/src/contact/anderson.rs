@@ -20,6 +20,8 @@
 //! sweep. The fixed point, and so the law every converged solve obeys, is unchanged: the solve
 //! still stops only after a plain sweep that changed no velocity by more than the tolerance.
 
+use super::{Contact, IslandBody, Row, flatten, move_impulses};
+
 /// Largest ridge, relative to the largest diagonal entry of ΔFᵀΔF, added to the normal
 /// equations of the mixing least squares: residual differences that are nearly parallel make
 /// them singular, and the ridge keeps γ bounded (a smaller step, never a wild one). Default
@@ -45,7 +47,7 @@ pub const STALL_SWEEPS_PER_MEMORY: usize = 20;
 /// residual and image differences (a ring: the least squares does not depend on the
 /// columns' order), their Gram matrix updated a column at a time, and the newest residual
 /// and image.
-pub(super) struct Anderson {
+struct Anderson {
     memory: usize,
     /// Numbers per iterate (three a contact).
     len: usize,
@@ -70,7 +72,7 @@ pub(super) struct Anderson {
 
 impl Anderson {
     /// An empty history keeping up to `memory` differences of iterates of `len` numbers.
-    pub(super) fn new(memory: usize, len: usize) -> Self {
+    fn new(memory: usize, len: usize) -> Self {
         Self {
             memory,
             len,
@@ -89,7 +91,7 @@ impl Anderson {
     }
 
     /// Forgets every iterate (the next proposal needs two new ones).
-    pub(super) fn restart(&mut self) {
+    fn restart(&mut self) {
         self.held = 0;
         self.next = 0;
         self.has_last = false;
@@ -98,7 +100,7 @@ impl Anderson {
     /// Records the sweep that took `before` to `after` and writes the accelerated proposal
     /// into `proposal`; returns `false` (and leaves `proposal` alone) while the history holds
     /// a single iterate or the least squares is degenerate.
-    pub(super) fn propose(&mut self, before: &[f64], after: &[f64], proposal: &mut [f64]) -> bool {
+    fn propose(&mut self, before: &[f64], after: &[f64], proposal: &mut [f64]) -> bool {
         let (n, m) = (self.len, self.memory);
         for ((f, a), b) in self.f.iter_mut().zip(after).zip(before) {
             *f = a - b;
@@ -168,6 +170,99 @@ impl Anderson {
 /// Σ aᵢbᵢ.
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// An accelerated solve's state between sweeps: the history, the impulses before and after
+/// the last sweep, and the best sweep output so far (an accelerated solve that ends
+/// unconverged returns it rather than wherever the last proposal led: a plain sweep's creep
+/// is monotone in practice, an extrapolation's path is not).
+pub(super) struct Accelerated {
+    history: Anderson,
+    before: Vec<f64>,
+    after: Vec<f64>,
+    proposal: Vec<f64>,
+    kept: Vec<f64>,
+    kept_residual: f64,
+    last_residual: f64,
+    proposed: bool,
+}
+
+impl Accelerated {
+    /// Starts from the contacts' impulses after a sweep of residual `residual`.
+    pub(super) fn new(memory: usize, contacts: &[Contact], residual: f64) -> Self {
+        let len = 3 * contacts.len();
+        let mut before = vec![0.0; len];
+        flatten(contacts, &mut before);
+        Self {
+            history: Anderson::new(memory, len),
+            kept: before.clone(),
+            before,
+            after: vec![0.0; len],
+            proposal: vec![0.0; len],
+            kept_residual: residual,
+            last_residual: f64::INFINITY,
+            proposed: false,
+        }
+    }
+
+    /// Forgets the history after the impulses were changed from outside (a direct solve).
+    pub(super) fn restart(&mut self, contacts: &[Contact]) {
+        self.history.restart();
+        flatten(contacts, &mut self.before);
+        self.proposed = false;
+        self.last_residual = f64::INFINITY;
+        self.kept_residual = f64::INFINITY;
+    }
+
+    /// Keeps the contacts' impulses if `residual` is the least seen.
+    pub(super) fn keep_if_best(&mut self, contacts: &[Contact], residual: f64) {
+        if residual < self.kept_residual {
+            self.kept_residual = residual;
+            flatten(contacts, &mut self.kept);
+        }
+    }
+
+    /// The residual of the kept sweep output.
+    pub(super) fn kept_residual(&self) -> f64 {
+        self.kept_residual
+    }
+
+    /// Puts the kept sweep output back.
+    pub(super) fn restore(
+        &self,
+        bodies: &mut [IslandBody],
+        contacts: &mut [Contact],
+        rows: &[Row],
+    ) {
+        move_impulses(bodies, contacts, rows, &self.kept);
+    }
+
+    /// After a sweep of residual `residual`: records it and moves the impulses to the
+    /// accelerated proposal if there is one.
+    pub(super) fn step(
+        &mut self,
+        bodies: &mut [IslandBody],
+        contacts: &mut [Contact],
+        rows: &[Row],
+        residual: f64,
+    ) {
+        if self.proposed && residual > self.last_residual {
+            self.history.restart();
+        }
+        self.last_residual = residual;
+        flatten(contacts, &mut self.after);
+        if self
+            .history
+            .propose(&self.before, &self.after, &mut self.proposal)
+        {
+            move_impulses(bodies, contacts, rows, &self.proposal);
+            flatten(contacts, &mut self.before);
+            self.proposed = true;
+        } else {
+            std::mem::swap(&mut self.before, &mut self.after);
+            self.proposed = false;
+        }
+    }
 }
 
 /// Solves the symmetric positive definite `m × m` system `a·x = b` in place (`a` row-major,
