@@ -99,6 +99,27 @@ fn face_contacts(
 }
 
 /// Σ p_n of contacts `range`.
+/// `n` boxes of mass `m` and half extents `half` stacked on the fixed ground from z = 0, at
+/// rest, with four corner contacts a face of friction `mu` (box k on box k − 1, the first on
+/// the ground).
+fn box_stack(m: f64, half: DVec3, n: usize, mu: f64) -> (Vec<IslandBody>, Vec<Contact>) {
+    let mut bodies = Vec::new();
+    let mut contacts = Vec::new();
+    for k in 0..n {
+        let com = DVec3::new(0.0, 0.0, (2 * k + 1) as f64 * half.z);
+        bodies.push(box_body(m, half, com).0);
+        contacts.extend(face_contacts(
+            com,
+            half,
+            com.z - half.z,
+            k,
+            k.checked_sub(1),
+            mu,
+        ));
+    }
+    (bodies, contacts)
+}
+
 fn normal_sum(contacts: &[Contact]) -> f64 {
     contacts.iter().map(|c| c.impulse.z).sum()
 }
@@ -430,20 +451,7 @@ fn random_islands_obey_complementarity_coulomb_and_dissipation() {
 fn acceleration_reaches_the_stack_solution_in_fewer_sweeps() {
     const PLAIN_AT_LEAST: usize = 400;
     let (m, half, n) = (1.5, DVec3::new(0.1, 0.075, 0.05), 8);
-    let mut bodies = Vec::new();
-    let mut contacts = Vec::new();
-    for k in 0..n {
-        let com = DVec3::new(0.0, 0.0, (2 * k + 1) as f64 * half.z);
-        bodies.push(box_body(m, half, com).0);
-        contacts.extend(face_contacts(
-            com,
-            half,
-            com.z - half.z,
-            k,
-            k.checked_sub(1),
-            0.6,
-        ));
-    }
+    let (mut bodies, contacts) = box_stack(m, half, n, 0.6);
     for b in &mut bodies {
         b.velocity.z -= G * H;
     }
@@ -486,20 +494,7 @@ fn acceleration_reaches_the_stack_solution_in_fewer_sweeps() {
 #[test]
 fn warm_start_from_the_solution_takes_one_sweep() {
     let (m, half) = (1.0, DVec3::new(0.1, 0.1, 0.05));
-    let mut bodies = Vec::new();
-    let mut contacts = Vec::new();
-    for k in 0..6 {
-        let com = DVec3::new(0.0, 0.0, (2 * k + 1) as f64 * half.z);
-        bodies.push(box_body(m, half, com).0);
-        contacts.extend(face_contacts(
-            com,
-            half,
-            com.z - half.z,
-            k,
-            k.checked_sub(1),
-            0.5,
-        ));
-    }
+    let (mut bodies, mut contacts) = box_stack(m, half, 6, 0.5);
     let kick = |bodies: &mut Vec<IslandBody>| {
         for b in bodies.iter_mut() {
             b.velocity = DVec3::new(0.0, 0.0, -G * H);
