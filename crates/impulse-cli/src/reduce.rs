@@ -118,6 +118,12 @@ fn parse_loads(m: &Mechanism, specs: &[String]) -> Result<Vec<Load>, String> {
         .collect()
 }
 
+/// Most steps a dynamics run may take (`--until` / `--dt`): at 3.8 µs a step, the fastest
+/// measured (docs/forks.md, helix-400 on one thread), about an hour; a count past it is a
+/// mistake in `--dt` or `--until` (`--dt 1e-300` asked for 1e300 steps and overflowed a
+/// buffer's size). Default `1e9`.
+pub const MAX_STEPS: f64 = 1e9;
+
 /// Runs the command; returns the text to print (warnings go to stderr).
 pub fn run(args: &ReduceArgs) -> Result<String, String> {
     // Numbers first: a bad value is refused before anything is read or built.
@@ -141,6 +147,25 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
         }
         if args.threads == Some(0) {
             return Err("--threads 0: need at least one thread".into());
+        }
+        if let Some(n) = args.threads
+            && n > impulse_reduced::max_threads()
+        {
+            return Err(format!(
+                "--threads {n}: at most {} on this machine ({} per core): more threads than \
+                 cores only wait for one another",
+                impulse_reduced::max_threads(),
+                impulse_reduced::MAX_THREADS_PER_CORE
+            ));
+        }
+        let steps = (args.until / args.dt).ceil();
+        if steps > MAX_STEPS {
+            return Err(format!(
+                "--dt {} with --until {}: {steps:.3e} steps, over the limit of {MAX_STEPS:.0e} \
+                 (about an hour at the fastest step measured): raise --dt or lower --until",
+                crate::text::significant(args.dt),
+                crate::text::significant(args.until)
+            ));
         }
     }
     let text = std::fs::read_to_string(&args.mechanism)

@@ -90,7 +90,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         if n == 0 {
             return Err("--threads 0: need at least one thread".into());
         }
-        world.set_threads(n).map_err(|e| e.to_string())?;
+        world
+            .set_threads(n)
+            .map_err(|e| format!("--threads {n}: {e}"))?;
     }
     world.set_profiling(args.profile);
     // The page shows the impacts: keep them all.
@@ -196,11 +198,20 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
     let _ = writeln!(s, "scene:            {name} ({} bodies)", rec.names.len());
     let _ = writeln!(s, "simulated time:   {until} s");
     let _ = writeln!(s, "wall time:        {}", text::duration(rec.wall_time));
-    let _ = writeln!(
-        s,
-        "slowdown:         {} (wall / simulated; < 1 is faster than real time)",
-        text::significant(rec.wall_time / until)
-    );
+    let slowdown = rec.wall_time / until;
+    let _ = if slowdown.is_finite() {
+        writeln!(
+            s,
+            "slowdown:         {} (wall / simulated; < 1 is faster than real time)",
+            text::significant(slowdown)
+        )
+    } else {
+        writeln!(
+            s,
+            "slowdown:         not measured (a run of {} s is too short to time)",
+            text::significant(until)
+        )
+    };
     let _ = writeln!(s, "collisions:       {}", c.collisions);
     let _ = writeln!(
         s,

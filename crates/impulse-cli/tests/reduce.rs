@@ -317,6 +317,39 @@ fn bad_numbers_are_refused_naming_the_flag() {
             out.stderr
         );
     }
+    // Sizes past their limits end at once with the limit named: a step count the run could not
+    // finish (it panicked on a buffer's size before) and more threads than the machine can use
+    // (it hung while starting them). The limits are computed here from the machine and the
+    // flags, not read from the code that checks them.
+    let most = 4 * std::thread::available_parallelism().map_or(1, usize::from);
+    for (args, needle) in [
+        (
+            vec!["--dt", "1e-300"],
+            "1.000e300 steps, over the limit".to_owned(),
+        ),
+        (
+            vec!["--dt", "1e-6", "--until", "1e4"],
+            "1.000e10 steps".to_owned(),
+        ),
+        (
+            vec!["--threads", "100000"],
+            format!("at most {most} on this machine"),
+        ),
+    ] {
+        let start = std::time::Instant::now();
+        let mut all = vec!["reduce", &y];
+        all.extend(&args);
+        let out = impulse(&all);
+        assert!(
+            !out.ok && out.stderr.starts_with("error: ") && out.stderr.contains(&needle),
+            "{args:?}: {}",
+            out.stderr
+        );
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(1),
+            "{args:?}"
+        );
+    }
     // A valid threshold is taken and reported.
     let ok = impulse(&["reduce", &y, "--tsvd", "1e-10", "--until", "0.01"]);
     assert!(ok.ok, "{}", ok.stderr);

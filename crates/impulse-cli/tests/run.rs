@@ -452,3 +452,24 @@ fn an_unwritable_output_is_refused_before_the_run() {
         assert!(!stdout.contains("scene:"), "{flag}: ran anyway: {stdout}");
     }
 }
+
+/// More threads than the machine can use end at once with the limit named (100 000 hung
+/// while the threads started); a run too short to time says so instead of printing an
+/// infinite slowdown. The limit is computed here from the machine.
+#[test]
+fn too_many_threads_and_a_run_too_short_to_time_say_so() {
+    let scene = scenes().join("block-drop.ron");
+    let most = 4 * std::thread::available_parallelism().map_or(1, usize::from);
+    let start = std::time::Instant::now();
+    let (ok, _, stderr) = impulse(&["run", scene.to_str().unwrap(), "--threads", "100000"]);
+    assert!(!ok, "{stderr}");
+    assert!(
+        stderr.contains("--threads 100000") && stderr.contains(&format!("at most {most}")),
+        "{stderr}"
+    );
+    assert!(start.elapsed() < std::time::Duration::from_secs(1));
+    let (ok, stdout, stderr) = impulse(&["run", scene.to_str().unwrap(), "--until", "5e-324"]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("is too short to time"), "{stdout}");
+    assert!(!stdout.contains("inf"), "{stdout}");
+}

@@ -48,6 +48,18 @@ use crate::mechanism::{Mechanism, Shape};
 use crate::obstacle::Obstacle;
 use crate::tol;
 
+/// Threads the internal links' pool may have per core of this machine, at most
+/// ([`ReducedSim::set_threads`]): a pool of more threads than cores only makes them wait, and
+/// a very large count would hang while its threads start. Default `4`.
+pub const MAX_THREADS_PER_CORE: usize = 4;
+
+/// The most threads [`ReducedSim::set_threads`] accepts on this machine:
+/// [`MAX_THREADS_PER_CORE`] times its cores (1 if it cannot tell).
+#[must_use]
+pub fn max_threads() -> usize {
+    MAX_THREADS_PER_CORE * std::thread::available_parallelism().map_or(1, usize::from)
+}
+
 /// Contact settings.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct ContactParams {
@@ -272,10 +284,18 @@ impl ReducedSim {
     /// (docs/forks.md, Table 1), and its step time does not wait on a second core.
     ///
     /// # Errors
-    /// [`Error::Argument`] for zero threads or when the pool cannot be built.
+    /// [`Error::Argument`] for zero threads, more than [`max_threads`], or when the pool
+    /// cannot be built.
     pub fn set_threads(&mut self, threads: usize) -> Result<(), Error> {
         if threads == 0 {
             return Err(Error::Argument("threads: need at least one".to_owned()));
+        }
+        let most = max_threads();
+        if threads > most {
+            return Err(Error::Argument(format!(
+                "threads: {threads} asked, at most {most} on this machine \
+                 ({MAX_THREADS_PER_CORE} per core): more threads than cores only wait"
+            )));
         }
         self.pool = Some(if threads == 1 {
             Threads::Caller

@@ -61,7 +61,9 @@ pub mod wrench;
 
 pub use construct::{ConstructOptions, MassModel, ReducedModel};
 pub use desc::{BaseDesc, JointDesc, JointKindDesc, LinkDesc, MechanismDesc, ShapeDesc};
-pub use dynamics::{BaseState, ContactParams, ReducedSim, StepReport};
+pub use dynamics::{
+    BaseState, ContactParams, MAX_THREADS_PER_CORE, ReducedSim, StepReport, max_threads,
+};
 pub use error::Error;
 pub use export::ModelExport;
 pub use linalg::Tsvd;

@@ -86,7 +86,8 @@ pub(crate) fn stream(seed: u64, index: u64) -> Xoshiro256PlusPlus {
 /// the results in index order; an error names the run (`what` and its index).
 ///
 /// # Errors
-/// [`SimError::Invalid`] for zero threads; the first failing run's error.
+/// [`SimError::Invalid`] for zero threads or more than [`crate::threads::max_threads`]; the first
+/// failing run's error.
 pub(crate) fn run_shard<T: Send>(
     what: &str,
     runs: u64,
@@ -95,20 +96,7 @@ pub(crate) fn run_shard<T: Send>(
     progress: &(dyn Fn(u64) + Sync),
     run: impl Fn(u64) -> Result<T, SimError> + Sync,
 ) -> Result<Vec<T>, SimError> {
-    if threads == 0 {
-        return Err(SimError::Invalid {
-            what: "study".into(),
-            field: "threads".into(),
-            problem: "need at least one thread".into(),
-        });
-    }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| SimError::Runtime {
-            time: 0.0,
-            message: format!("thread pool: {e}"),
-        })?;
+    let pool = crate::threads::pool(threads, "study")?;
     let done = AtomicU64::new(0);
     pool.install(|| {
         (0..shard.runs_of(runs))

@@ -66,6 +66,7 @@ pub mod poses;
 pub mod record;
 pub mod scene;
 pub mod sustained;
+pub mod threads;
 pub mod world;
 
 pub use error::SimError;

@@ -600,20 +600,10 @@ impl World {
     /// [`World::set_parallel_min_bodies`] asks stays on the calling thread either way.
     ///
     /// # Errors
-    /// [`SimError::Invalid`] for zero threads, [`SimError::Runtime`] if the pool cannot be
-    /// built.
+    /// [`SimError::Invalid`] for zero threads or more than [`crate::threads::max_threads`],
+    /// [`SimError::Runtime`] if the pool cannot be built.
     pub fn set_threads(&mut self, threads: usize) -> Result<(), SimError> {
-        if threads == 0 {
-            return Err(SimError::Invalid {
-                what: "world".into(),
-                field: "threads".into(),
-                problem: "need at least one thread".into(),
-            });
-        }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| self.runtime(format!("thread pool: {e}")))?;
+        let pool = crate::threads::pool(threads, "world")?;
         self.pool = Some(Arc::new(pool));
         Ok(())
     }
