@@ -60,7 +60,9 @@ enum Command {
         /// Simulated end time in seconds (default: the scene's `duration`).
         #[arg(long, allow_negative_numbers = true)]
         until: Option<f64>,
-        /// Write the trajectory (one row per frame and body) to this .csv or .json file.
+        /// Write the trajectory (one row per frame and body) to this .csv or .json file. It is
+        /// written as the run goes, into FILE.partial, renamed to FILE when the run ends well:
+        /// memory does not grow with the run's length.
         #[arg(long)]
         out: Option<PathBuf>,
         /// Write SVG plots (energy.svg, paths.svg) into this directory.

@@ -1,9 +1,9 @@
 //! `impulse run`: simulate a scene file, print a summary, write the trajectory and plots.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use impulse_sim::{ContactMode, Recording, Scene, World};
+use impulse_sim::{ContactMode, Recording, Scene, TrajectoryFormat, TrajectoryWriter, World};
 
 use crate::plot;
 use crate::progress::Progress;
@@ -98,17 +98,39 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
     // The page shows the impacts: keep them all.
     world.set_event_log(args.html.is_some());
     let progress = Progress::time("impulse run", until);
-    let rec = impulse_sim::run(&mut world, until, scene.desc.output_rate, |t| {
-        progress.set_time(t);
-    })
-    .map_err(|e| e.to_string())?;
+    // The trajectory is written as it is made, into a file beside the output that takes its
+    // name only when the run has ended well: a failed or interrupted run leaves the file the
+    // user had (or none), never half of one.
+    let mut sink = match args.out {
+        Some(out) => Some(Sink::create(out, &world)?),
+        None => None,
+    };
+    let rec = impulse_sim::run_streaming(
+        &mut world,
+        until,
+        scene.desc.output_rate,
+        // Only the plots, the page and the glTF file read the frames after the run; the
+        // summary reads the first and the last.
+        if args.plot.is_some() || args.html.is_some() || args.gltf.is_some() {
+            KEPT_FRAMES
+        } else {
+            2
+        },
+        |f| sink.as_mut().map_or(Ok(()), |s| s.frame(f)),
+        |t| progress.set_time(t),
+    );
+    let rec = match rec {
+        Ok(rec) => rec,
+        Err(e) => {
+            if let Some(s) = sink {
+                s.abandon();
+            }
+            return Err(e.to_string());
+        }
+    };
     progress.finish();
-    if let Some(out) = args.out {
-        let text = match format_of(out)? {
-            Format::Csv => rec.to_csv(),
-            Format::Json => rec.to_json(),
-        };
-        std::fs::write(out, text).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    if let Some(s) = sink {
+        s.finish(rec.max_penetration())?;
     }
     if let Some(path) = args.gltf {
         crate::glb::write(path, &rec, &world)?;
@@ -150,6 +172,68 @@ fn profile_text(p: &impulse_sim::Profile, world: &World) -> String {
         ));
     }
     text
+}
+
+/// Frames a run keeps in memory for its plots, page and glTF file: a longer run's are every
+/// second, fourth, … frame (and the last), so that memory does not grow with the run's length
+/// while `--out` gets every frame ([`impulse_sim::run_streaming`]). Default `10_000`: a page of
+/// ten bodies at that many frames is about 13 MB.
+pub const KEPT_FRAMES: usize = 10_000;
+
+/// The `--out` file being written: a temporary file beside it, renamed at the end.
+struct Sink {
+    writer: TrajectoryWriter<std::io::BufWriter<std::fs::File>>,
+    partial: PathBuf,
+    out: PathBuf,
+}
+
+impl Sink {
+    fn create(out: &Path, world: &World) -> Result<Self, String> {
+        let format = match format_of(out)? {
+            Format::Csv => TrajectoryFormat::Csv,
+            Format::Json => TrajectoryFormat::Json,
+        };
+        let mut name = out.file_name().unwrap_or_default().to_os_string();
+        name.push(".partial");
+        let partial = out.with_file_name(name);
+        let file = std::fs::File::create(&partial)
+            .map_err(|e| format!("--out: cannot write {}: {e}", partial.display()))?;
+        let names: Vec<String> = world.bodies().map(|(_, b)| b.name.clone()).collect();
+        let writer = TrajectoryWriter::new(std::io::BufWriter::new(file), format, &names)
+            .map_err(|e| format!("--out: cannot write {}: {e}", partial.display()))?;
+        Ok(Self {
+            writer,
+            partial,
+            out: out.to_path_buf(),
+        })
+    }
+
+    fn frame(&mut self, f: &impulse_sim::Frame) -> Result<(), impulse_sim::SimError> {
+        self.writer
+            .frame(f)
+            .map_err(|e| impulse_sim::SimError::Runtime {
+                time: f.time,
+                message: format!("cannot write {}: {e}", self.partial.display()),
+            })
+    }
+
+    /// Ends the file and gives it its name.
+    fn finish(self, max_penetration: f64) -> Result<(), String> {
+        let cannot = |e: std::io::Error| format!("cannot write {}: {e}", self.out.display());
+        let file = self
+            .writer
+            .finish(max_penetration)
+            .map_err(cannot)?
+            .into_inner()
+            .map_err(|e| cannot(e.into_error()))?;
+        file.sync_all().map_err(cannot)?;
+        std::fs::rename(&self.partial, &self.out).map_err(cannot)
+    }
+
+    /// Removes the temporary file of a run that failed.
+    fn abandon(self) {
+        let _ = std::fs::remove_file(&self.partial);
+    }
 }
 
 enum Format {

@@ -34,6 +34,8 @@ fn run_two_balls_writes_summary_csv_and_plots() {
         plots.to_str().unwrap(),
     ]);
     assert!(ok, "{stderr}");
+    // The trajectory is streamed into a file beside it that takes its name at the end.
+    assert!(csv.is_file() && !dir.join("traj.csv.partial").exists());
     assert!(stdout.contains("collisions:       1\n"), "{stdout}");
     assert!(
         stdout.contains("penetration:      none: largest 0.000e0 (0.000 ε_c"),

@@ -71,7 +71,7 @@ pub mod world;
 
 pub use error::SimError;
 pub use monitor::{PenetrationMonitor, PenetrationReport};
-pub use record::{Frame, Recording, run};
+pub use record::{Frame, Recording, TrajectoryFormat, TrajectoryWriter, run, run_streaming};
 pub use scene::{Scene, SceneDesc};
 pub use sustained::{ContactMode, SustainedSettings};
 pub use world::{
