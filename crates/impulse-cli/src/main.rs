@@ -83,6 +83,10 @@ enum Command {
         /// on it.
         #[arg(long)]
         threads: Option<usize>,
+        /// Stop cleanly after this many wall-clock seconds, at the next frame: the outputs are
+        /// written and valid up to there, and the summary says where the run stopped.
+        #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+        max_wall: Option<f64>,
         /// Contact model, overriding the scene's `contact_model`: `switching` (impacts as
         /// impulses, sustained contact as constraints; the default) or `impulse` (every
         /// contact an impulse, the thesis's pure model).
@@ -209,6 +213,7 @@ fn main() -> ExitCode {
             threads,
             contact_model,
             profile,
+            max_wall,
         } => run::run(&run::RunArgs {
             scene,
             until: *until,
@@ -219,6 +224,7 @@ fn main() -> ExitCode {
             threads: *threads,
             contact_model: *contact_model,
             profile: *profile,
+            max_wall: *max_wall,
         }),
         Command::Massprops {
             mesh,

@@ -29,6 +29,8 @@ pub struct RunArgs<'a> {
     pub contact_model: Option<ContactModelArg>,
     /// Print the wall-time profile of the loop's parts.
     pub profile: bool,
+    /// Wall seconds after which the run stops at its next frame, its outputs valid.
+    pub max_wall: Option<f64>,
 }
 
 /// The contact model named on the command line.
@@ -61,6 +63,13 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
     };
     if !(until.is_finite() && until > 0.0) {
         return Err(format!("--until {until}: must be a finite time > 0"));
+    }
+    if let Some(w) = args.max_wall
+        && !(w.is_finite() && w > 0.0)
+    {
+        return Err(format!(
+            "--max-wall {w}: must be a finite number of seconds > 0"
+        ));
     }
     impulse_sim::scene::check_frames(until, scene.desc.output_rate)
         .map_err(|e| format!("--until {until}: {e} (lower the scene's output_rate)"))?;
@@ -101,6 +110,7 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
     // The trajectory is written as it is made, into a file beside the output that takes its
     // name only when the run has ended well: a failed or interrupted run leaves the file the
     // user had (or none), never half of one.
+    let wall = std::time::Instant::now();
     let mut sink = match args.out {
         Some(out) => Some(Sink::create(out, &world)?),
         None => None,
@@ -116,7 +126,14 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         } else {
             2
         },
-        |f| sink.as_mut().map_or(Ok(()), |s| s.frame(f)),
+        |f| {
+            if let Some(s) = sink.as_mut() {
+                s.frame(f)?;
+            }
+            Ok(args
+                .max_wall
+                .is_none_or(|w| wall.elapsed().as_secs_f64() < w))
+        },
         |t| progress.set_time(t),
     );
     let rec = match rec {
@@ -147,7 +164,21 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         std::fs::write(&paths, plot::paths_plot(&rec, &world, &scene)?)
             .map_err(|e| format!("cannot write {}: {e}", paths.display()))?;
     }
-    let mut text = summary(&scene, &rec, until);
+    let reached = rec.frames.last().map_or(until, |f| f.time);
+    let mut text = summary(&scene, &rec, reached);
+    if reached < until {
+        if !text.ends_with('\n') {
+            text.push('\n');
+        }
+        let _ = write!(
+            text,
+            "stopped:          at the wall-time limit of {} s (--max-wall), after {} of {} \
+             simulated seconds; the outputs hold the run up to there",
+            text::significant(args.max_wall.unwrap_or(f64::NAN)),
+            text::significant(reached),
+            text::significant(until)
+        );
+    }
     if let Some(p) = world.profile() {
         text.push_str(&profile_text(&p, &world));
     }

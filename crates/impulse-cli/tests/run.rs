@@ -475,3 +475,49 @@ fn too_many_threads_and_a_run_too_short_to_time_say_so() {
     assert!(stdout.contains("is too short to time"), "{stdout}");
     assert!(!stdout.contains("inf"), "{stdout}");
 }
+
+/// `--max-wall` stops a run at the frame after the limit with valid outputs: the CSV is
+/// complete up to the frame the summary names (every body at every frame time, read back
+/// here), not renamed half-written, and the summary says where the run stopped. A limit that
+/// is not a positive number is refused.
+#[test]
+fn a_wall_time_limit_stops_the_run_with_valid_outputs() {
+    let dir = temp_dir("max-wall");
+    let csv = dir.join("traj.csv");
+    let scene = scenes().join("dominos.ron");
+    let (ok, stdout, stderr) = impulse(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        csv.to_str().unwrap(),
+        "--max-wall",
+        "1e-9",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("\nstopped:          at the wall-time limit"),
+        "{stdout}"
+    );
+    assert!(!dir.join("traj.csv.partial").exists());
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<&str> = text.lines().skip(1).collect();
+    let times: std::collections::BTreeSet<String> = rows
+        .iter()
+        .map(|r| r.split(',').next().unwrap().to_owned())
+        .collect();
+    let bodies = rows.len() / times.len();
+    assert_eq!(
+        rows.len(),
+        bodies * times.len(),
+        "every body at every frame"
+    );
+    let last: f64 = times
+        .iter()
+        .map(|t| t.parse::<f64>().unwrap())
+        .fold(0.0, f64::max);
+    assert!(last < 1.0, "stopped early: last frame at {last} s");
+    for bad in ["0", "-1", "nan"] {
+        let (ok, _, stderr) = impulse(&["run", scene.to_str().unwrap(), "--max-wall", bad]);
+        assert!(!ok && stderr.contains("--max-wall"), "{bad}: {stderr}");
+    }
+}

@@ -85,11 +85,12 @@ pub fn run(
 ) -> Result<Recording, crate::SimError> {
     check_run(world, until, rate)?;
     crate::scene::check_frames(until - world.time(), rate).map_err(|p| invalid("rate", p))?;
-    run_streaming(world, until, rate, usize::MAX, |_| Ok(()), progress)
+    run_streaming(world, until, rate, usize::MAX, |_| Ok(true), progress)
 }
 
 /// [`run`] in memory that does not grow with the run's length: every frame is handed to
-/// `on_frame` as it is made (to be written out), and the [`Recording`] keeps at most `kept`
+/// `on_frame` as it is made (to be written out; it answers whether to go on: `false` ends the
+/// run at that frame, its last, as a time limit does), and the [`Recording`] keeps at most `kept`
 /// frames (at least 2): every frame while they fit, then every second, fourth, … (the stride
 /// doubles each time they fill), always the first and the last. Its counters, penetration
 /// reports and wall time cover the whole run.
@@ -102,7 +103,7 @@ pub fn run_streaming(
     until: f64,
     rate: f64,
     kept: usize,
-    mut on_frame: impl FnMut(&Frame) -> Result<(), crate::SimError>,
+    mut on_frame: impl FnMut(&Frame) -> Result<bool, crate::SimError>,
     mut progress: impl FnMut(f64),
 ) -> Result<Recording, crate::SimError> {
     check_run(world, until, rate)?;
@@ -114,17 +115,17 @@ pub fn run_streaming(
     let mut monitor = PenetrationMonitor::new();
     monitor.sample(world);
     let first = Frame::of(world);
-    on_frame(&first)?;
+    let mut go_on = on_frame(&first)?;
     let mut frames = Kept::new(kept, first);
     let mut k = 1u64;
-    loop {
+    while go_on {
         let t = (t0 + k as f64 / rate).min(until);
         world.step_until(t)?;
         monitor.sample(world);
         let frame = Frame::of(world);
-        on_frame(&frame)?;
+        go_on = on_frame(&frame)?;
         progress(t);
-        if t >= until {
+        if t >= until || !go_on {
             frames.finish(k, frame);
             break;
         }
@@ -432,7 +433,7 @@ mod tests {
                 cap,
                 |f| {
                     seen.push(f.clone());
-                    Ok(())
+                    Ok(true)
                 },
                 |_| {},
             )
@@ -463,8 +464,23 @@ mod tests {
             assert_eq!(kept.counters, full.counters);
         }
         // Everything kept when it fits.
-        let all = run_streaming(&mut world(), 1.0, 100.0, 1000, |_| Ok(()), |_| {}).unwrap();
+        let all = run_streaming(&mut world(), 1.0, 100.0, 1000, |_| Ok(true), |_| {}).unwrap();
         assert_eq!(all.frames, full.frames);
+        // Stopped by its handler at frame 30: that frame is the last, the run ends there.
+        let mut n = 0;
+        let stopped = run_streaming(
+            &mut world(),
+            1.0,
+            100.0,
+            1000,
+            |_| {
+                n += 1;
+                Ok(n <= 30)
+            },
+            |_| {},
+        )
+        .unwrap();
+        assert_eq!(stopped.frames, full.frames[..31]);
     }
 
     /// An error from the frame handler ends the run with it.
@@ -481,7 +497,7 @@ mod tests {
                 if n == 5 {
                     Err(invalid("out", "disk full".into()))
                 } else {
-                    Ok(())
+                    Ok(true)
                 }
             },
             |_| {},
