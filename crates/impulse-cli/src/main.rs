@@ -23,6 +23,7 @@ mod bowling;
 mod dynamics;
 mod glb;
 mod html;
+mod interrupt;
 mod mesh;
 mod plot;
 mod poses;
@@ -248,6 +249,9 @@ fn main() -> ExitCode {
                     );
                     ExitCode::FAILURE
                 }
+                // A run stopped by Ctrl-C or SIGTERM printed its summary and kept its outputs
+                // valid; its exit code says it did not finish.
+                _ if interrupt::requested() => ExitCode::from(interrupt::EXIT_INTERRUPTED),
                 _ => ExitCode::SUCCESS,
             }
         }

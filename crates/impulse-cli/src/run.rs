@@ -110,6 +110,7 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
     // The trajectory is written as it is made, into a file beside the output that takes its
     // name only when the run has ended well: a failed or interrupted run leaves the file the
     // user had (or none), never half of one.
+    crate::interrupt::install();
     let wall = std::time::Instant::now();
     let mut sink = match args.out {
         Some(out) => Some(Sink::create(out, &world)?),
@@ -130,9 +131,10 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
             if let Some(s) = sink.as_mut() {
                 s.frame(f)?;
             }
-            Ok(args
-                .max_wall
-                .is_none_or(|w| wall.elapsed().as_secs_f64() < w))
+            Ok(!crate::interrupt::requested()
+                && args
+                    .max_wall
+                    .is_none_or(|w| wall.elapsed().as_secs_f64() < w))
         },
         |t| progress.set_time(t),
     );
@@ -170,11 +172,18 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         if !text.ends_with('\n') {
             text.push('\n');
         }
+        let why = if crate::interrupt::requested() {
+            "interrupted (Ctrl-C or SIGTERM)".to_owned()
+        } else {
+            format!(
+                "at the wall-time limit of {} s (--max-wall)",
+                text::significant(args.max_wall.unwrap_or(f64::NAN))
+            )
+        };
         let _ = write!(
             text,
-            "stopped:          at the wall-time limit of {} s (--max-wall), after {} of {} \
-             simulated seconds; the outputs hold the run up to there",
-            text::significant(args.max_wall.unwrap_or(f64::NAN)),
+            "stopped:          {why}, after {} of {} simulated seconds; the outputs hold the \
+             run up to there",
             text::significant(reached),
             text::significant(until)
         );

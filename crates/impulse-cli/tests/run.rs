@@ -521,3 +521,61 @@ fn a_wall_time_limit_stops_the_run_with_valid_outputs() {
         assert!(!ok && stderr.contains("--max-wall"), "{bad}: {stderr}");
     }
 }
+
+/// Ctrl-C (SIGINT, sent here with `kill`) ends a run at its next frame: exit code 130, the
+/// summary says it was interrupted and where, and `--out` is a whole file under its own name
+/// (every body at every frame up to the stop), with no `.partial` left. The run is long enough
+/// (60 s of the pool break, several seconds of wall time) that it cannot end on its own first.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_ends_a_run_with_valid_outputs_and_exit_code_130() {
+    let dir = temp_dir("interrupt");
+    let csv = dir.join("traj.csv");
+    let partial = dir.join("traj.csv.partial");
+    let scene = scenes().join("pool-break.ron");
+    let child = Command::new(env!("CARGO_BIN_EXE_impulse"))
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--until",
+            "60",
+            "--out",
+            csv.to_str().unwrap(),
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until the run is writing frames.
+    let start = std::time::Instant::now();
+    while std::fs::metadata(&partial).map_or(0, |m| m.len()) < 100_000 {
+        assert!(start.elapsed().as_secs() < 60, "the run never wrote frames");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(130), "{stdout}");
+    assert!(
+        stdout.contains("stopped:          interrupted (Ctrl-C or SIGTERM)"),
+        "{stdout}"
+    );
+    assert!(csv.is_file() && !partial.exists());
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<&str> = text.lines().skip(1).collect();
+    let times: std::collections::BTreeSet<String> = rows
+        .iter()
+        .map(|r| r.split(',').next().unwrap().to_owned())
+        .collect();
+    assert_eq!(rows.len() % times.len(), 0, "every body at every frame");
+    let last: f64 = times
+        .iter()
+        .map(|t| t.parse::<f64>().unwrap())
+        .fold(0.0, f64::max);
+    assert!(last < 60.0, "interrupted: last frame at {last} s");
+    assert!(text.ends_with('\n'));
+}
