@@ -59,6 +59,10 @@ pub struct ReduceArgs {
     /// the bundled mechanisms (docs/forks.md, Table 1).
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
+    /// Stop cleanly after this many wall-clock seconds: the outputs hold the run up to there
+    /// and the report says where it stopped (`"stopped"`). Ctrl-C does the same (exit 130).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    max_wall: Option<f64>,
     /// Simulated end time (s), > 0.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     until: f64,
@@ -124,6 +128,11 @@ fn parse_loads(m: &Mechanism, specs: &[String]) -> Result<Vec<Load>, String> {
 /// buffer's size). Default `1e9`.
 pub const MAX_STEPS: f64 = 1e9;
 
+/// Steps between two polls of a stop request (Ctrl-C, `--max-wall`). Default `64`: a poll is
+/// a clock read, about a small mechanism's step; 64 steps of the largest bundled mechanism
+/// take well under a second.
+pub const STOP_POLL_STEPS: usize = 64;
+
 /// Runs the command; returns the text to print (warnings go to stderr).
 pub fn run(args: &ReduceArgs) -> Result<String, String> {
     // Numbers first: a bad value is refused before anything is read or built.
@@ -156,6 +165,13 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
                  cores only wait for one another",
                 impulse_reduced::max_threads(),
                 impulse_reduced::MAX_THREADS_PER_CORE
+            ));
+        }
+        if let Some(w) = args.max_wall
+            && !(w.is_finite() && w > 0.0)
+        {
+            return Err(format!(
+                "--max-wall {w}: must be a finite number of seconds > 0"
             ));
         }
         let steps = (args.until / args.dt).ceil();
@@ -439,18 +455,34 @@ fn simulate(
     // µs per step: the step and every internal link's pose (a step as Table 1 counts it),
     // after a warm-up; the recording below is outside it.
     let mut clock = StepClock::for_run(steps);
+    crate::interrupt::install();
     let wall = Instant::now();
+    // Why the run ended before `steps`, and the step it ended at.
+    let mut stopped: Option<(&str, usize)> = None;
     for k in 1..=steps {
         clock.step(|| {
             sim.step();
             sim.internal_poses(&mut internal);
         });
-        if k % every == 0 || k == steps || k == every - 1 {
+        // A stop request is polled every STOP_POLL_STEPS steps (a clock read costs about as
+        // much as a small mechanism's step).
+        if k % STOP_POLL_STEPS == 0 && k < steps {
+            if crate::interrupt::requested() {
+                stopped = Some(("interrupted (Ctrl-C or SIGTERM)", k));
+            } else if args
+                .max_wall
+                .is_some_and(|w| wall.elapsed().as_secs_f64() >= w)
+            {
+                stopped = Some(("at the wall-time limit (--max-wall)", k));
+            }
+        }
+        let last = k == steps || stopped.is_some();
+        if k % every == 0 || last || k == every - 1 {
             let poses: Vec<Pose> = (0..sim.model.end_effectors.len())
                 .map(|i| sim.end_effector_pose(i))
                 .chain(internal.iter().copied())
                 .collect();
-            if k % every == 0 || k == steps {
+            if k % every == 0 || last {
                 let t = k as f64 * args.dt;
                 let vel: Vec<Twist> = match &prev {
                     Some(p) => p
@@ -470,6 +502,9 @@ fn simulate(
                 progress.set_time(t);
             }
             prev = Some(poses);
+        }
+        if stopped.is_some() {
+            break;
         }
     }
     progress.finish();
@@ -509,8 +544,22 @@ fn simulate(
     let threads = args
         .threads
         .map_or_else(|| "\"every core\"".to_owned(), |n| n.to_string());
+    let (steps, stopped) = match stopped {
+        Some((why, k)) => (
+            k,
+            format!(
+                "  \"stopped\": {},\n",
+                json_string(&format!(
+                    "{why}, after {} of {} simulated seconds",
+                    crate::text::significant(k as f64 * args.dt),
+                    crate::text::significant(args.until)
+                ))
+            ),
+        ),
+        None => (steps, String::new()),
+    };
     Ok(format!(
-        "{{\n  \"mechanism\": {},\n  \"links\": {},\n  \"build_ms\": {build_ms:.3},\n{rank}  \"threads\": {threads},\n  \"steps\": {steps},\n  \"timed_steps\": {},\n  \"us_per_step\": {mean},\n  \"us_per_step_median\": {median},\n  \"wall_s\": {wall:.4},\n  \"end_effector_0\": {ee:?},\n  \"max_constraint_error\": {max_err:.3e},\n{maps}\n}}",
+        "{{\n  \"mechanism\": {},\n  \"links\": {},\n  \"build_ms\": {build_ms:.3},\n{rank}{stopped}  \"threads\": {threads},\n  \"steps\": {steps},\n  \"timed_steps\": {},\n  \"us_per_step\": {mean},\n  \"us_per_step_median\": {median},\n  \"wall_s\": {wall:.4},\n  \"end_effector_0\": {ee:?},\n  \"max_constraint_error\": {max_err:.3e},\n{maps}\n}}",
         json_string(&m.name),
         m.links.len(),
         clock.timed(),

@@ -487,3 +487,55 @@ fn same_numbers(path: &str, shown: &serde_json::Value, actual: &serde_json::Valu
         other => assert_eq!(other, actual, "docs/forks.md {path}"),
     }
 }
+
+/// `--max-wall` stops a dynamics run between steps with its outputs valid: the report names
+/// the stop and the steps taken, fewer than asked, and the trajectory file ends at that step's
+/// time (read back here). A limit that is not a positive number is refused.
+#[test]
+fn a_wall_time_limit_stops_the_run_with_valid_outputs() {
+    let helix = mechanism("helix-400.ron");
+    let dir = std::env::temp_dir().join(format!("reduce-max-wall-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("traj.csv");
+    let out = impulse(&[
+        "reduce",
+        &helix,
+        "--until",
+        "1000",
+        "--dt",
+        "1e-3",
+        "--max-wall",
+        "0.2",
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(out.ok, "{}", out.stderr);
+    let json = out.json.unwrap();
+    let steps = json["steps"].as_u64().unwrap();
+    assert!(steps < 1_000_000, "{json}");
+    assert!(
+        json["stopped"]
+            .as_str()
+            .is_some_and(|s| s.starts_with("at the wall-time limit")),
+        "{json}"
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let last: f64 = text
+        .lines()
+        .skip(1)
+        .map(|r| r.split(',').next().unwrap().parse::<f64>().unwrap())
+        .fold(0.0, f64::max);
+    assert!(
+        (last - steps as f64 * 1e-3).abs() < 1e-9,
+        "{last} vs {steps} steps"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    for bad in ["0", "-1", "nan"] {
+        let out = impulse(&["reduce", &helix, "--max-wall", bad]);
+        assert!(
+            !out.ok && out.stderr.contains("--max-wall"),
+            "{bad}: {}",
+            out.stderr
+        );
+    }
+}
