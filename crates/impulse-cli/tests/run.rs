@@ -499,22 +499,7 @@ fn a_wall_time_limit_stops_the_run_with_valid_outputs() {
         "{stdout}"
     );
     assert!(!dir.join("traj.csv.partial").exists());
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let rows: Vec<&str> = text.lines().skip(1).collect();
-    let times: std::collections::BTreeSet<String> = rows
-        .iter()
-        .map(|r| r.split(',').next().unwrap().to_owned())
-        .collect();
-    let bodies = rows.len() / times.len();
-    assert_eq!(
-        rows.len(),
-        bodies * times.len(),
-        "every body at every frame"
-    );
-    let last: f64 = times
-        .iter()
-        .map(|t| t.parse::<f64>().unwrap())
-        .fold(0.0, f64::max);
+    let last = last_whole_frame(&csv);
     assert!(last < 1.0, "stopped early: last frame at {last} s");
     for bad in ["0", "-1", "nan"] {
         let (ok, _, stderr) = impulse(&["run", scene.to_str().unwrap(), "--max-wall", bad]);
@@ -565,17 +550,28 @@ fn ctrl_c_ends_a_run_with_valid_outputs_and_exit_code_130() {
         "{stdout}"
     );
     assert!(csv.is_file() && !partial.exists());
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let rows: Vec<&str> = text.lines().skip(1).collect();
-    let times: std::collections::BTreeSet<String> = rows
-        .iter()
-        .map(|r| r.split(',').next().unwrap().to_owned())
-        .collect();
-    assert_eq!(rows.len() % times.len(), 0, "every body at every frame");
-    let last: f64 = times
-        .iter()
-        .map(|t| t.parse::<f64>().unwrap())
-        .fold(0.0, f64::max);
+    let last = last_whole_frame(&csv);
     assert!(last < 60.0, "interrupted: last frame at {last} s");
-    assert!(text.ends_with('\n'));
+}
+
+/// The time of the last frame of a trajectory CSV, after checking that the file is whole:
+/// it ends with a line break and every frame has a row for every body.
+fn last_whole_frame(csv: &Path) -> f64 {
+    let text = std::fs::read_to_string(csv).unwrap();
+    assert!(text.ends_with('\n'), "cut mid-line");
+    let mut rows_at: std::collections::BTreeMap<String, usize> = Default::default();
+    for row in text.lines().skip(1) {
+        *rows_at
+            .entry(row.split(',').next().unwrap().to_owned())
+            .or_default() += 1;
+    }
+    let bodies = *rows_at.values().next().expect("frames");
+    assert!(
+        rows_at.values().all(|&n| n == bodies),
+        "every body at every frame"
+    );
+    rows_at
+        .keys()
+        .map(|t| t.parse::<f64>().unwrap())
+        .fold(0.0, f64::max)
 }

@@ -166,6 +166,40 @@ fn random_link(rng: &mut SplitMix, i: usize, p: DVec3) -> LinkDesc {
         )
 }
 
+/// Whether link `a` is a tree ancestor of link `b` (`parent[k]` is link k's parent, the base
+/// 0 its own root).
+pub(crate) fn is_tree_ancestor(parent: &[usize], a: usize, mut b: usize) -> bool {
+    while b != 0 {
+        b = parent[b];
+        if b == a {
+            return true;
+        }
+    }
+    false
+}
+
+/// Adds joint number `*joints` of `kind` between links `links.0` (parent) and `links.1` at
+/// `anchor`, and counts it.
+fn add_joint(
+    d: &mut MechanismDesc,
+    rng: &mut SplitMix,
+    joints: &mut usize,
+    kind: usize,
+    links: (usize, usize),
+    anchor: DVec3,
+    decades: (f64, f64),
+) {
+    let names = [format!("j{joints}"), link_name(links.0), link_name(links.1)];
+    *joints += 1;
+    d.joint(joint(
+        rng,
+        kind,
+        [&names[0], &names[1], &names[2]],
+        anchor,
+        decades,
+    ));
+}
+
 /// A tree of `n` links (parents drawn among the earlier links; `chain` forces a chain), joint
 /// compliances in `decades`, `loops` extra joints between branches, up to `max_ee` end
 /// effectors among the leaves.
@@ -198,26 +232,9 @@ fn tree(
         let t = rng.uniform(0.0, 1.0);
         let anchor = pos[p] + (at - pos[p]) * t;
         let kind = rng.below(0, 4);
-        let names = [format!("j{joints}"), link_name(p), link_name(i)];
-        joints += 1;
-        d.joint(joint(
-            rng,
-            kind,
-            [&names[0], &names[1], &names[2]],
-            anchor,
-            decades,
-        ));
+        add_joint(&mut d, rng, &mut joints, kind, (p, i), anchor, decades);
         has_child[p] = true;
     }
-    let ancestor = |a: usize, mut b: usize| {
-        while b != 0 {
-            b = parent[b];
-            if b == a {
-                return true;
-            }
-        }
-        false
-    };
     let mut made = 0;
     for _ in 0..20 * loops {
         if made == loops || n < 3 {
@@ -225,20 +242,12 @@ fn tree(
         }
         let c = rng.below(2, n + 1);
         let p = rng.below(1, c);
-        if ancestor(p, c) {
+        if is_tree_ancestor(&parent, p, c) {
             continue;
         }
         let anchor = pos[p] + (pos[c] - pos[p]) * rng.uniform(0.0, 1.0);
         let kind = [0, 2][rng.below(0, 2)];
-        let names = [format!("j{joints}"), link_name(p), link_name(c)];
-        joints += 1;
-        d.joint(joint(
-            rng,
-            kind,
-            [&names[0], &names[1], &names[2]],
-            anchor,
-            decades,
-        ));
+        add_joint(&mut d, rng, &mut joints, kind, (p, c), anchor, decades);
         has_child[p] = true;
         made += 1;
     }

@@ -133,15 +133,6 @@ pub fn random_mechanism(
     // Loops join two branches, as the rungs of a ladder do: the closing joint's parent is
     // never a tree ancestor of its child (a closure back onto one's own ancestor makes a short
     // stiff cycle that locks most directions).
-    let ancestor = |a: usize, mut b: usize| {
-        while b != 0 {
-            b = parent[b];
-            if b == a {
-                return true;
-            }
-        }
-        false
-    };
     let mut made = 0;
     for _ in 0..20 * loops {
         if made == loops || n < 3 {
@@ -149,7 +140,7 @@ pub fn random_mechanism(
         }
         let c = rng.random_range(2..=n);
         let p = rng.random_range(1..c);
-        if ancestor(p, c) {
+        if crate::hard_cases::is_tree_ancestor(&parent, p, c) {
             continue;
         }
         add_joint(&mut d, rng, p, c, &pos, true);
