@@ -584,7 +584,11 @@ impl World {
     /// when the pair overlaps, so do its manifold's points (edges crossing edges, no vertex
     /// near);
     /// `None` when none of them approaches (nothing presses). Without near vertices, and for
-    /// smooth pieces, the closest points' midpoint ([`World::witness_point`]).
+    /// smooth pieces, the closest points' midpoint ([`World::witness_point`]) — `None` too
+    /// when it does not approach: a ball touching a dish's piece and not pressing it gets the
+    /// progress floor of a calm pair (without it, a ball held against its neighbours and
+    /// sliding along a dish had its pair checked at keys converging to one instant until
+    /// the loop stalled, V11 in checking mode).
     fn contact_point(&self, (a, b): (u32, u32), scan: &NearPiece, n: DVec3) -> Option<DVec3> {
         let mid = self.witness_point((a, b), scan, n);
         let (ba, bb) = (self.b(a), self.b(b));
@@ -592,10 +596,12 @@ impl World {
             &ba.shape.pieces()[scan.pieces.0],
             &bb.shape.pieces()[scan.pieces.1],
         );
-        let (Convex::Polyhedron(x), Convex::Polyhedron(y)) = (&pa.convex, &pb.convex) else {
-            return Some(mid);
-        };
         let eps = self.collision_epsilon();
+        let rest = contact::APPROACH_FLOOR_REL * (2.0 * self.gravity.length() * eps).sqrt();
+        let presses = |p: DVec3| (ba.point_velocity(p) - bb.point_velocity(p)).dot(n) < -rest;
+        let (Convex::Polyhedron(x), Convex::Polyhedron(y)) = (&pa.convex, &pb.convex) else {
+            return presses(mid).then_some(mid);
+        };
         let (pose_a, pose_b) = (ba.pose * pa.pose, bb.pose * pb.pose);
         let mut near = patch::near_vertices(x, &pose_a, y, &pose_b, n, eps);
         if scan.depth > 0.0 {
@@ -626,11 +632,7 @@ impl World {
         if mid.distance(centre) > spread + eps {
             near.push(mid);
         }
-        let rest = contact::APPROACH_FLOOR_REL * (2.0 * self.gravity.length() * eps).sqrt();
-        let pressing: Vec<DVec3> = near
-            .into_iter()
-            .filter(|&p| (ba.point_velocity(p) - bb.point_velocity(p)).dot(n) < -rest)
-            .collect();
+        let pressing: Vec<DVec3> = near.into_iter().filter(|&p| presses(p)).collect();
         if pressing.is_empty() {
             return None;
         }
