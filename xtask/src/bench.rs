@@ -1,7 +1,9 @@
 //! `cargo xtask bench [--out DIR] [--case NAME]`: speed against error for every bundled scene.
 //!
-//! Each scene of [`crate::cases::scenes::scene_checks`] runs at three accuracy settings
-//! ([`SETTINGS`]: the collision epsilon and the integrator tolerances together), in a release
+//! Each scene of [`crate::cases::scenes::scene_checks`] runs at six accuracy settings
+//! ([`SETTINGS`]: the collision epsilon and the integrator tolerances together, coarse to fine;
+//! then the island step tolerance alone, `accuracy.step_tolerance`, 1e-2, 0.1 and 1 ε_c
+//! beside the default's 1e-3), in a release
 //! build (the command re-runs itself with `--release`). For each run it prints the wall time,
 //! the slowdown (wall / simulated), the thesis's Table 7.1 slowdown for the same example (SGI
 //! Indigo II, 200 MHz R4400, 1996) and the ratio between the two, and the error: the relative
@@ -39,27 +41,57 @@ pub struct Setting {
     pub rotation_tolerance: f64,
     /// Collision integrator relative tolerance (`impulse-response`).
     pub collision_tolerance: f64,
+    /// Island step tolerance in units of ε_c (`impulse_sim::sustained::SustainedSettings`).
+    pub step_tolerance: f64,
 }
 
-/// The settings each scene runs at, coarse to fine.
-pub const SETTINGS: [Setting; 3] = [
+/// The default island step tolerance (`impulse_sim::sustained::DEFAULT_STEP_TOLERANCE`).
+const STEP_TOLERANCE: f64 = impulse_sim::sustained::DEFAULT_STEP_TOLERANCE;
+
+/// The settings each scene runs at: coarse to fine, then the island step tolerance alone
+/// (a work–precision sweep of the switching model's step policy).
+pub const SETTINGS: [Setting; 6] = [
     Setting {
         name: "coarse",
         epsilon_factor: 4.0,
         rotation_tolerance: 1e-8,
         collision_tolerance: 1e-6,
+        step_tolerance: STEP_TOLERANCE,
     },
     Setting {
         name: "default",
         epsilon_factor: 1.0,
         rotation_tolerance: 1e-12,
         collision_tolerance: 1e-10,
+        step_tolerance: STEP_TOLERANCE,
     },
     Setting {
         name: "fine",
         epsilon_factor: 0.25,
         rotation_tolerance: 1e-13,
         collision_tolerance: 1e-12,
+        step_tolerance: STEP_TOLERANCE,
+    },
+    Setting {
+        name: "step 1e-2",
+        epsilon_factor: 1.0,
+        rotation_tolerance: 1e-12,
+        collision_tolerance: 1e-10,
+        step_tolerance: 1e-2,
+    },
+    Setting {
+        name: "step 0.1",
+        epsilon_factor: 1.0,
+        rotation_tolerance: 1e-12,
+        collision_tolerance: 1e-10,
+        step_tolerance: 0.1,
+    },
+    Setting {
+        name: "step 1",
+        epsilon_factor: 1.0,
+        rotation_tolerance: 1e-12,
+        collision_tolerance: 1e-10,
+        step_tolerance: 1.0,
     },
 ];
 
@@ -176,7 +208,7 @@ pub fn run_bench(options: &Options) -> Result<()> {
         return Err(format!("no scene case {:?}", options.case));
     }
     println!(
-        "{:<26} {:<8} {:>9} {:>8} {:>9} {:>10} {:>9} {:>8} {:>10} {:>5}",
+        "{:<26} {:<9} {:>9} {:>8} {:>9} {:>10} {:>9} {:>8} {:>10} {:>5}",
         "scene",
         "setting",
         "eps_c",
@@ -200,7 +232,7 @@ pub fn run_bench(options: &Options) -> Result<()> {
                 None => ("-".into(), "-".into()),
             };
             println!(
-                "{:<26} {:<8} {:>9.2e} {:>8.2} {:>9.3} {:>10.4} {:>9} {:>8} {:>10.2e} {:>5}  {}",
+                "{:<26} {:<9} {:>9.2e} {:>8.2} {:>9.3} {:>10.4} {:>9} {:>8} {:>10.2e} {:>5}  {}",
                 row.case,
                 row.setting,
                 row.epsilon,
@@ -243,6 +275,7 @@ fn bench_one(check: &SceneCheck, setting: &Setting) -> Result<Row> {
     scene.desc.collision_epsilon *= setting.epsilon_factor;
     scene.desc.accuracy.rotation_tolerance = setting.rotation_tolerance;
     scene.desc.accuracy.collision_tolerance = setting.collision_tolerance;
+    scene.desc.accuracy.step_tolerance = setting.step_tolerance;
     let mut world = World::from_scene(&scene).map_err(|e| format!("{}: {e}", check.case))?;
     world.set_event_log(check.event_log);
     let start = Instant::now();

@@ -204,6 +204,10 @@ pub struct AccuracyDesc {
     /// Whether a microcollision tries the reversing impulse first (thesis §3.5: yes). Default
     /// `true`.
     pub reversing: bool,
+    /// The position error an island step of the switching contact model may leave, in units
+    /// of ε_c ([`crate::sustained::SustainedSettings::step_tolerance`]). Default
+    /// [`crate::sustained::DEFAULT_STEP_TOLERANCE`].
+    pub step_tolerance: f64,
 }
 
 impl Default for AccuracyDesc {
@@ -213,6 +217,7 @@ impl Default for AccuracyDesc {
             collision_tolerance: 1e-10,
             max_restitution: 5.0,
             reversing: true,
+            step_tolerance: crate::sustained::DEFAULT_STEP_TOLERANCE,
         }
     }
 }
@@ -657,6 +662,7 @@ impl AccuracyDesc {
     fn validate(&self) -> Result<(), (&'static str, String)> {
         positive(self.rotation_tolerance).map_err(|p| ("rotation_tolerance", p))?;
         positive(self.collision_tolerance).map_err(|p| ("collision_tolerance", p))?;
+        positive(self.step_tolerance).map_err(|p| ("step_tolerance", p))?;
         if !(self.max_restitution.is_finite() && self.max_restitution >= 1.0) {
             return Err((
                 "max_restitution",

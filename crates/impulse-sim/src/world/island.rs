@@ -537,6 +537,9 @@ impl World {
                 .filter(|p| turn_of.get(p).is_some_and(|&(_, fast)| fast))
                 .copied()
                 .collect();
+            if h0 < settings.step * (1.0 - 1e-12) && !was_cut {
+                self.counters.turning_steps += 1;
+            }
             let h = self.step_island(island, h0, fast, &fast_pairs, rest)?;
             for p in &island.pairs {
                 if let Some(held) = self.islands.held.get_mut(p) {
@@ -762,6 +765,9 @@ impl World {
                 .fold(0.0, f64::max);
             if change > 0.0 {
                 let allowed = STRIKE_STEP_FRACTION * self.envelope_left() / change;
+                if allowed < h0 {
+                    self.counters.struck_steps += 1;
+                }
                 h0 = h0.min(allowed.max(settings.min_step));
             }
         }
@@ -786,6 +792,7 @@ impl World {
         let mut h = h0;
         let mut solved;
         let mut tries = 0;
+        let mut located = false;
         loop {
             tries += 1;
             bodies.clone_from(&after_jolt);
@@ -878,6 +885,9 @@ impl World {
                 }
             }
             if fit < 1.0 && tries <= MAX_LOCATE_SOLVES && h > settings.min_step {
+                if tries == 1 {
+                    self.counters.fitted_steps += 1;
+                }
                 let cut = (h * fit).max(settings.min_step);
                 for (c, sol) in contacts.iter_mut().zip(&solved.1) {
                     c.impulse = sol.impulse * (cut / h);
@@ -894,26 +904,45 @@ impl World {
             // that sliding friction on the whole patch takes to deliver the friction impulse
             // that stopped the slip, |Σ p_t| / (μ Σ p_n), for a patch slipping at the start of
             // the step and sticking at its end.
+            // A transition whose rounding to the step's end moves its contact point by less
+            // than the step tolerance is not located (module documentation of
+            // [`crate::sustained`]): that is ½·u₀·h·(1 − s) for the slip u₀ at the start,
+            // bounded by ½·u₀·h (the fraction s read from the impulses overestimates the
+            // slip's time where a load outlasts it: a block stopping on a ramp, held by
+            // friction for the rest of the step).
             let slip_tol = SLIP_FRACTION * v_micro;
+            let drift_tol = settings.step_tolerance * eps;
             let mut s = 1.0_f64;
+            let mut rounded = 0;
             for range in &patches {
                 let (c0, c) = (&contacts[range.clone()], &solved.1[range.clone()]);
-                let slipping = c0
+                let slip = c0
                     .iter()
-                    .any(|c| tangential_speed(&after_jolt, c) > slip_tol);
+                    .map(|c| tangential_speed(&after_jolt, c))
+                    .fold(0.0, f64::max);
                 let sticks = c.iter().all(|c| {
                     c.impulse.truncate().length() < STICK_FRACTION * c.friction * c.impulse.z
                 });
                 let total: DVec3 = c.iter().map(|c| c.impulse).sum();
                 let cone = c[0].friction * total.z;
-                if slipping && sticks && cone > 0.0 {
-                    s = s.min(total.truncate().length() / cone);
+                if slip > slip_tol && sticks && cone > 0.0 {
+                    let at = total.truncate().length() / cone;
+                    if 0.5 * slip * h > drift_tol {
+                        s = s.min(at);
+                    } else {
+                        rounded += 1;
+                    }
                 }
             }
             // Cut again while a patch still sticks inside its cone (several points share
             // a patch's load unevenly, so one cut may stop short).
             if s >= LOCATE_DONE {
+                self.counters.rounded_transitions += rounded;
                 break;
+            }
+            if !located {
+                located = true;
+                self.counters.located_steps += 1;
             }
             h = (s * h).max(MIN_STEP_FRACTION * settings.step);
             for (c, sol) in contacts.iter_mut().zip(&solved.1) {

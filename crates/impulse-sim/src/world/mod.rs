@@ -175,6 +175,19 @@ pub struct Counters {
     /// Island steps taken (the switching contact model, [`crate::sustained`]; one per awake
     /// island).
     pub island_steps: u64,
+    /// Island steps shorter than [`SustainedSettings::step`] because a body of the island
+    /// turns (`world/hold.rs`).
+    pub turning_steps: u64,
+    /// Island steps shortened after a strike changed their bodies' speeds.
+    pub struck_steps: u64,
+    /// Island steps cut within the step: a feature outside the manifold or a speculative
+    /// point would have closed past the envelope over the step chosen at its start.
+    pub fitted_steps: u64,
+    /// Island steps cut to a located slip → stick transition.
+    pub located_steps: u64,
+    /// Slip → stick transitions taken at the step's end: rounding them moved their contact
+    /// points by less than [`SustainedSettings::step_tolerance`]·ε_c.
+    pub rounded_transitions: u64,
     /// Transients resolved by an impulsive solve of an island.
     pub transients: u64,
     /// Islands put to sleep.
@@ -341,7 +354,10 @@ impl WorldSettings {
                 reversing: desc.accuracy.reversing,
             },
             contact_mode: desc.contact_model,
-            sustained: SustainedSettings::default(),
+            sustained: SustainedSettings {
+                step_tolerance: desc.accuracy.step_tolerance,
+                ..SustainedSettings::default()
+            },
             base_dir: PathBuf::from("."),
         }
     }
