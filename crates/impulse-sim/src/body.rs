@@ -231,6 +231,44 @@ impl Body {
         Pose::new(state.rotation, state.position) * self.frame.inverse()
     }
 
+    /// Whether the body is one smooth convex piece (a sphere or an ellipsoid): turning it
+    /// brings no feature toward anything that its point of contact does not already show.
+    /// Against a convex piece it has one support point, whose normal speed is the contact's
+    /// own, so only the curvature of its motion escapes a step's linear prediction
+    /// (`world/hold.rs`).
+    #[must_use]
+    pub fn is_smooth(&self) -> bool {
+        self.smooth_piece().is_some()
+    }
+
+    /// The body's one smooth piece, if it is one ([`Body::is_smooth`]).
+    fn smooth_piece(&self) -> Option<&impulse_collide::shape::Piece> {
+        use impulse_collide::shape::Convex;
+        match self.shape.pieces() {
+            [piece] if matches!(piece.convex, Convex::Sphere(_) | Convex::Ellipsoid(_)) => {
+                Some(piece)
+            }
+            _ => None,
+        }
+    }
+
+    /// For a smooth body ([`Body::is_smooth`]) turned to `rotation` (body frame → world): its
+    /// support point in the world direction `dir`, less its centre of mass: the lever arm of a
+    /// contact on it facing `dir`. `None` for any other body.
+    #[must_use]
+    pub fn support_arm(&self, rotation: DQuat, dir: DVec3) -> Option<DVec3> {
+        use impulse_collide::shape::Convex;
+        let piece = self.smooth_piece()?;
+        let to_piece = rotation * piece.pose.rotation;
+        let local = to_piece.inverse() * dir;
+        let x = match &piece.convex {
+            Convex::Sphere(b) => b.support(local),
+            Convex::Ellipsoid(e) => e.support(local),
+            Convex::Polyhedron(_) => return None,
+        };
+        Some(rotation * piece.pose.transform_point(x))
+    }
+
     /// How fast turning at `omega` (world) can move the body's surface toward anything: over
     /// its pieces, the largest ‖ω‖·r (r the piece's [`Body::reach`]), except that a solid of
     /// revolution turning about its own axis moves nothing (it stays the same set): split ω

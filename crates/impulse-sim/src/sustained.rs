@@ -35,7 +35,11 @@
 //!   (`impulse_response::Contact::lever_arms`; with the arm at the start a box tipping over
 //!   its edge came late by 1.5·‖ω‖·h relative), and the contact law holds for the point's
 //!   velocity at the step's end (`impulse_response::Contact::velocity_bias`; left out, a
-//!   pivoting edge climbs off its support by ½·h²·ω²·r a step).
+//!   pivoting edge climbs off its support by ½·h²·ω²·r a step). A turning smooth body's
+//!   contact point runs over its surface instead: its arm is its support point at the
+//!   mid-step pose, and its step is bounded by the curvature of its motion alone (no feature
+//!   of it can come through the envelope; with the arm at the step's start a rattleback
+//!   stepped so gained energy).
 //!   Full steps end on the grid of multiples of `h` in absolute time, so islands step at
 //!   the same instants and share the event loop's steps (each of which advances every body).
 //! - **Position stabilisation**: a held contact rests at the gap g_r = `rest_gap_fraction`·ε_c

@@ -168,13 +168,18 @@ impl World {
             return Ok(PairContact::Apart);
         }
         // Slow: no other feature can come through the envelope within the shortest step.
+        // A smooth body's turning brings no other feature (turn speed zero on its side): its
+        // step is bounded by the curvature of its surface's motion.
         let turn = pair_turn(ba, bb, struck, Some(found[0].normal));
         if turn <= margin * self.rotation_limit() {
             let outside = vec![Vec::new(); found.len()];
+            let step = self
+                .rotation_step(turn)
+                .min(self.curvature_step(smooth_accel(ba) + smooth_accel(bb)));
             return Ok(PairContact::Held {
                 manifolds: found,
                 outside,
-                step: self.rotation_step(turn),
+                step,
                 fast: false,
             });
         }
@@ -317,16 +322,27 @@ fn spin(x: &crate::body::Body) -> f64 {
 
 /// ‖ω‖²·r of a body, r its rotational reach (the centripetal acceleration of its farthest
 /// point: an estimate of the curvature of its surface's motion), or for `k` = 1 how fast its
-/// turning moves its surface ([`crate::body::Body::surface_speed`]: ‖ω‖·r, but for a solid of
-/// revolution turning about its axis); zero for a fixed or sleeping body.
+/// turning can bring another feature closer ([`crate::body::Body::surface_speed`]: ‖ω‖·r,
+/// but for a solid of revolution turning about its axis, and nothing for a smooth body,
+/// [`crate::body::Body::is_smooth`]); zero for a fixed or sleeping body.
 fn spin_power(x: &crate::body::Body, k: i32) -> f64 {
     if !x.takes_impulses() || x.asleep {
         0.0
     } else if k == 1 {
-        x.surface_speed(x.omega)
+        if x.is_smooth() {
+            0.0
+        } else {
+            x.surface_speed(x.omega)
+        }
     } else {
         x.omega.length().powi(k) * x.max_reach()
     }
+}
+
+/// [`spin_power`]`(x, 2)` of a smooth body ([`crate::body::Body::is_smooth`]), zero for any
+/// other: what bounds the step of a smooth body held by its one support point.
+fn smooth_accel(x: &crate::body::Body) -> f64 {
+    if x.is_smooth() { spin_power(x, 2) } else { 0.0 }
 }
 
 /// How fast rotation can accelerate the two bodies' surfaces: Σ ‖ω‖²·r over both (the
@@ -374,7 +390,8 @@ pub(super) struct TurnSide {
     /// How fast its turning moves its surface ([`crate::body::Body::surface_speed`]: ‖ω‖
     /// times the rotational reach, but for a solid of revolution turning about its axis;
     /// zero for a fixed, scripted or sleeping body: a platter spinning under a ball turns its
-    /// face in its own plane).
+    /// face in its own plane; zero for a smooth body, whose turning brings no other feature:
+    /// its support point's own motion is the contact's, [`crate::body::Body::is_smooth`]).
     spin_reach: f64,
     /// Whether the body is a compound.
     compound: bool,
@@ -393,7 +410,11 @@ impl TurnSide {
         let moving = x.takes_impulses() && !x.asleep;
         Self {
             velocity: if moving { velocity } else { DVec3::ZERO },
-            spin_reach: if moving { x.surface_speed(omega) } else { 0.0 },
+            spin_reach: if moving && !x.is_smooth() {
+                x.surface_speed(omega)
+            } else {
+                0.0
+            },
             compound: x.reach.len() > 1,
         }
     }

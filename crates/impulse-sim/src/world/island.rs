@@ -828,7 +828,29 @@ impl World {
                     let start = normal_speed(&after_jolt, c);
                     c.target_normal_velocity = (-beyond / h).max(-2.0 * beyond / h - start);
                 } else {
-                    let (arms, bias) = mid_arms(&after_jolt, c, material[k], h);
+                    let (mut arms, mut bias) = mid_arms(&after_jolt, c, material[k], h);
+                    // A turning smooth body's contact point runs over its surface: its arm
+                    // at mid-step is its support point at the mid-step pose, and the law
+                    // holds for the support point's velocity at the step's end.
+                    let n = c.normal.normalize();
+                    let smooth = |k: usize, dir: DVec3| -> Option<(DVec3, DVec3)> {
+                        let (b, w) = (self.b(ids[k]), after_jolt[k].omega);
+                        if b.max_reach() == 0.0 || w == DVec3::ZERO {
+                            return None;
+                        }
+                        let turned = |t: f64| DQuat::from_scaled_axis(w * t) * b.pose.rotation;
+                        let mid = b.support_arm(turned(0.5 * h), dir)?;
+                        let end = b.support_arm(turned(h), dir)?;
+                        Some((mid, w.cross(end - mid)))
+                    };
+                    if let Some((mid, b1)) = smooth(c.body1, -n) {
+                        arms.0 = mid;
+                        bias += b1;
+                    }
+                    if let Some((mid, b2)) = c.body2.and_then(|k2| smooth(k2, n)) {
+                        arms.1 = mid;
+                        bias -= b2;
+                    }
                     c.lever_arms = Some(arms);
                     c.velocity_bias = bias;
                 }
