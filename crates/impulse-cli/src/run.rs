@@ -346,11 +346,12 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
         ContactMode::Switching => writeln!(
             s,
             "contact model:    switching: {} island steps, {} impulsive island solves, {} islands put to sleep\n\
-             island steps:     {} short for turning, {} after strikes, {} cut to fit the envelope, {} cut to a slip → stick transition; {} transitions taken at the step's end\n\
+             island steps:     {} long (at rest or steady), {} short for turning, {} after strikes, {} cut to fit the envelope, {} cut to a slip → stick transition; {} transitions taken at the step's end\n\
              contact solver:   {} solves, {} sweeps, {} stopped unconverged at the sweep cap, {} direct solves accepted",
             c.island_steps,
             c.transients,
             c.sleeps,
+            c.long_steps,
             c.turning_steps,
             c.struck_steps,
             c.fitted_steps,

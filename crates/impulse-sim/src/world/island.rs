@@ -110,7 +110,7 @@ const FAST_MAX_SWEEPS: usize = 50;
 /// impulse kept in frame coordinates would return with its friction pointing elsewhere.
 #[derive(Clone, Debug, Default)]
 pub(super) struct HeldPair {
-    manifolds: Vec<Manifold>,
+    pub(super) manifolds: Vec<Manifold>,
     /// Per manifold, the vertex–face points of vertices outside its contact features (a
     /// fast-turning pair's, [`World::pair_contact`]); each is a patch of its own, starts cold
     /// and keeps no impulse.
@@ -145,6 +145,10 @@ pub(super) struct Islands {
     /// Islands (by their first body) whose direct solves failed at their last steps: how
     /// many in a row, and until when their solves go without one ([`DIRECT_BACKOFF_MAX`]).
     direct_backoff: FxHashMap<u32, (u32, f64)>,
+    /// Per island body, how much its last island step changed its held load: the change of
+    /// its centre's acceleration plus that of its angular acceleration times its reach
+    /// (∞ when the step was a strike's or its first). Read by [`World::is_steady`].
+    pub(super) load_change: FxHashMap<u32, f64>,
     /// Bodies whose last island step left their load envelope or changed their velocity
     /// (`world/envelope.rs`): their heap pairs need new keys. Drained by each island step.
     moved: Vec<u32>,
@@ -160,6 +164,7 @@ impl Islands {
             due: DueTimes::default(),
             still_since: FxHashMap::default(),
             direct_backoff: FxHashMap::default(),
+            load_change: FxHashMap::default(),
             moved: Vec::new(),
         }
     }
@@ -278,6 +283,8 @@ impl World {
     /// by the caller) and an island step is due now.
     pub(super) fn hold(&mut self, pair: (u32, u32)) {
         self.islands.held.hold(pair);
+        self.islands.load_change.remove(&pair.0);
+        self.islands.load_change.remove(&pair.1);
         self.step_now(pair.0);
         self.step_now(pair.1);
     }
@@ -309,6 +316,8 @@ impl World {
     fn release(&mut self, pair: (u32, u32)) -> Result<(), SimError> {
         self.sync_pair(pair)?;
         self.islands.held.remove(&pair);
+        self.islands.load_change.remove(&pair.0);
+        self.islands.load_change.remove(&pair.1);
         for i in [pair.0, pair.1] {
             self.release_link(i);
             if !self.islands.held.holds_body(i) {
@@ -529,8 +538,11 @@ impl World {
                 .pairs
                 .iter()
                 .any(|p| turn_of.get(p).is_some_and(|&(_, fast)| fast));
-            let rest = (h0 >= settings.step && !was_cut && !fast && self.at_rest(island))
-                .then(|| self.rest_step());
+            let rest = (h0 >= settings.step
+                && !was_cut
+                && !fast
+                && (self.at_rest(island) || self.is_steady(island)))
+            .then(|| self.rest_step());
             let fast_pairs: Vec<(u32, u32)> = island
                 .pairs
                 .iter()
@@ -784,6 +796,7 @@ impl World {
                     c.impulse *= long / h0;
                 }
                 h0 = long;
+                self.counters.long_steps += 1;
             }
         }
         let after_jolt = bodies.clone();
@@ -999,6 +1012,14 @@ impl World {
             let b = self.b_mut(i);
             // An impulsive solve changed the velocity: every key of the body is stale.
             let jolted = b.velocity != v || b.omega != w;
+            let change = if jolted {
+                f64::INFINITY
+            } else {
+                b.mass
+                    .map_or(0.0, |m| (force - b.held_force).length() / m.mass)
+                    + (b.inverse_inertia_world() * (torque - b.held_torque)).length()
+                        * b.max_reach()
+            };
             b.velocity = v;
             b.omega = w;
             b.held_force = force;
@@ -1027,6 +1048,7 @@ impl World {
             if moved {
                 self.islands.moved.push(i);
             }
+            self.islands.load_change.insert(i, change);
         }
         self.hold_link_loads(&sources, &systems_after_jolt, &after_jolt, &solution, h)?;
         // Keep each point's impulse for the next step's warm start.

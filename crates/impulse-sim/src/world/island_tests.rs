@@ -793,10 +793,10 @@ fn a_wall_placed_touching_is_solved_from_its_warm_start() {
     assert!(deepest <= eps, "deepest {:.3} ε_c", deepest / eps);
 }
 
-/// Islands that step at the nominal rate share the instants of their steps (the island-step
-/// grid): eight blocks that landed at different times, sliding on a frictionless floor
-/// (they never stop, so never sleep), take one loop step per nominal step between them,
-/// not one each. Every loop step advances every moving body, so steps out of phase made
+/// Islands share the instants of their steps (the island-step grid): eight blocks that
+/// landed at different times, sliding on a frictionless floor (they never stop, so never
+/// sleep; their held loads are steady, so they take long steps), take one loop step per long
+/// step between them, not one each. Every loop step advances every moving body, so steps out of phase made
 /// the work grow with the square of the number of islands.
 #[test]
 fn islands_landed_at_different_times_step_together() {
@@ -822,7 +822,9 @@ fn islands_landed_at_different_times_step_together() {
     let span = 0.1;
     world.step_until(0.5 + span).expect("runs");
     let after = world.counters();
-    let grid = span / SustainedSettings::default().step;
+    // Sliding steadily, each takes the long steps of a steady island (`world/steady.rs`),
+    // on the grid of their multiples.
+    let grid = span / (super::island::REST_STEP_MULTIPLE * SustainedSettings::default().step);
     let steps = (after.steps - before.steps) as f64;
     let island_steps = (after.island_steps - before.island_steps) as f64;
     assert!(
@@ -876,7 +878,8 @@ fn rounded_ball(
 /// one below it is taken at the step's end. Either way the rolling speed after it is the
 /// closed form's 5v0/7 (the friction impulse that stops the slip is the same). Rounded, the
 /// centre's speed falls by μg·s·h over the whole step h instead of its fraction s, which
-/// puts the ball ahead by ½·μg·s·(1 − s)·h² ≤ ⅛·μg·h²; with the transition located or
+/// puts the ball ahead by ½·μg·s·(1 − s)·h² ≤ ⅛·μg·h², h at most the long step of a steady
+/// island (a sliding ball's held load does not change, `world/steady.rs`); with the transition located or
 /// rounded under the default tolerance the centre is within 2/7 of that tolerance (the
 /// centre takes 2/7 of the slip's change). Against the closed form of sliding into rolling,
 /// for launch speeds that put the transition at different points of its step; the ball starts
@@ -884,7 +887,7 @@ fn rounded_ball(
 #[test]
 fn a_rounded_transition_keeps_the_rolling_speed_and_its_drift_bound() {
     let (r, mu, eps, g) = (0.1, 0.3, 1e-4, 9.81);
-    let h = SustainedSettings::default().step;
+    let h = super::island::REST_STEP_MULTIPLE * SustainedSettings::default().step;
     let default = SustainedSettings::default().step_tolerance;
     let ahead_bound = 0.125 * mu * g * h * h;
     let mut worst = [0.0_f64; 2];

@@ -57,6 +57,7 @@ mod island;
 mod materials;
 mod patch;
 mod profile;
+mod steady;
 mod step;
 mod sync;
 
@@ -175,6 +176,9 @@ pub struct Counters {
     /// Island steps taken (the switching contact model, [`crate::sustained`]; one per awake
     /// island).
     pub island_steps: u64,
+    /// Island steps taken eight nominal steps long (`REST_STEP_MULTIPLE`, `world/island.rs`): of islands at
+    /// rest, or steady (`world/steady.rs`).
+    pub long_steps: u64,
     /// Island steps shorter than [`SustainedSettings::step`] because a body of the island
     /// turns (`world/hold.rs`).
     pub turning_steps: u64,

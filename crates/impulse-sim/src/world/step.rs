@@ -463,6 +463,7 @@ fn difference(a: &Counters, b: &Counters) -> Counters {
         min_distance: a.min_distance,
         max_penetration: a.max_penetration,
         island_steps: a.island_steps - b.island_steps,
+        long_steps: a.long_steps - b.long_steps,
         turning_steps: a.turning_steps - b.turning_steps,
         struck_steps: a.struck_steps - b.struck_steps,
         fitted_steps: a.fitted_steps - b.fitted_steps,
