@@ -95,10 +95,30 @@ pub fn run(
 /// doubles each time they fill), always the first and the last. Its counters, penetration
 /// reports and wall time cover the whole run.
 ///
+/// The run stops at its first error, so its steps keep no copy of the world to restore
+/// ([`World::set_rollback`] is off for its duration): after an error the world is where the
+/// failure was found, and the frames handed out so far are the run's.
+///
 /// # Errors
 /// As [`run`], without the frame-count limit (no frame is kept beyond `kept`); the first
 /// error `on_frame` returns, which ends the run.
 pub fn run_streaming(
+    world: &mut World,
+    until: f64,
+    rate: f64,
+    kept: usize,
+    on_frame: impl FnMut(&Frame) -> Result<bool, crate::SimError>,
+    progress: impl FnMut(f64),
+) -> Result<Recording, crate::SimError> {
+    let rollback = world.rollback();
+    world.set_rollback(false);
+    let result = stream(world, until, rate, kept, on_frame, progress);
+    world.set_rollback(rollback);
+    result
+}
+
+/// [`run_streaming`] with the world's rollback off.
+fn stream(
     world: &mut World,
     until: f64,
     rate: f64,

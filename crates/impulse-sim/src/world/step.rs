@@ -35,7 +35,8 @@ impl World {
     /// [`SimError::Invalid`] for a `t` that is not finite; [`SimError::Runtime`] when a body's
     /// state stops being finite (or its motion cannot be bounded), a load function returns a
     /// non-finite load, or the broad phase cannot hold a body. The world is then exactly as it
-    /// was before the call.
+    /// was before the call (unless [`World::set_rollback`] turned that off: then it is where
+    /// the failure was found).
     pub fn step_until(&mut self, t: f64) -> Result<StepReport, SimError> {
         if !t.is_finite() {
             return Err(SimError::Invalid {
@@ -66,7 +67,7 @@ impl World {
             }
             return Ok(self.report_since(start, &before, checked_before));
         }
-        let backup = self.clone();
+        let backup = self.rollback.then(|| self.clone());
         self.recent.clear();
         let run = |w: &mut World| -> Result<(), SimError> {
             w.refuse_unbounded()?;
@@ -81,7 +82,9 @@ impl World {
             Ok(())
         };
         if let Err(e) = run(self) {
-            *self = backup;
+            if let Some(backup) = backup {
+                *self = backup;
+            }
             return Err(e);
         }
         Ok(self.report_since(start, &before, checked_before))

@@ -420,6 +420,42 @@ fn a_failed_step_changes_nothing() {
     ));
 }
 
+/// With rollback off ([`World::set_rollback`]), the same failing step leaves the world where
+/// the failure was found (later than before the call: the load function was evaluated at
+/// 0.5 s), and [`crate::run_streaming`], which turns rollback off for its steps, fails the
+/// same way and hands the setting back as it found it.
+#[test]
+fn without_rollback_a_failed_step_stops_where_it_failed() {
+    let failing = || {
+        let mut w = world();
+        w.add_body(&floor()).unwrap();
+        let h = w
+            .add_body(&BodyDesc::new("b", ShapeDesc::sphere(0.1)).at([0.0, 0.0, 0.6]))
+            .unwrap();
+        w.set_load_fn(h, 100.0, |t, _| {
+            Load::force(DVec3::new(if t < 0.5 { 0.0 } else { f64::NAN }, 0.0, 0.0))
+        })
+        .unwrap();
+        w.step_until(0.2).unwrap();
+        w
+    };
+    let mut w = failing();
+    assert!(w.rollback());
+    w.set_rollback(false);
+    let err = w.step_until(1.0).unwrap_err();
+    assert!(err.to_string().contains("load function"), "{err}");
+    assert!(
+        w.time() > 0.2 && w.time() <= 0.5 + 1e-12,
+        "t = {}",
+        w.time()
+    );
+    let mut w = failing();
+    let streamed = crate::run_streaming(&mut w, 1.0, 100.0, 2, |_| Ok(true), |_| {});
+    assert!(streamed.is_err());
+    assert!(w.rollback(), "run_streaming left rollback off");
+    assert!(w.time() > 0.2, "t = {}", w.time());
+}
+
 /// A body whose angular velocity cannot be bounded (its energy overflows) is never assumed
 /// still: the step refuses to move past it, and the world is unchanged.
 #[test]
