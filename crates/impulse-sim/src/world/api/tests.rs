@@ -393,10 +393,9 @@ fn impulses_and_contacts() {
     assert!((landing.time - (0.3f64 / G).sqrt()).abs() < 1e-3);
 }
 
-/// An error in a step leaves the world exactly as it was: a load function that returns NaN at
-/// t ≥ 0.5 fails the step to 1 s, and time, states and counters are those before the call.
-#[test]
-fn a_failed_step_changes_nothing() {
+/// A ball over a floor, run to 0.2 s, under a load function that returns NaN from t = 0.5 s:
+/// the next step past 0.5 s fails.
+fn failing_at_half_a_second() -> (World, BodyHandle) {
     let mut w = world();
     w.add_body(&floor()).unwrap();
     let h = w
@@ -407,6 +406,14 @@ fn a_failed_step_changes_nothing() {
     })
     .unwrap();
     w.step_until(0.2).unwrap();
+    (w, h)
+}
+
+/// An error in a step leaves the world exactly as it was: a load function that returns NaN at
+/// t ≥ 0.5 fails the step to 1 s, and time, states and counters are those before the call.
+#[test]
+fn a_failed_step_changes_nothing() {
+    let (mut w, h) = failing_at_half_a_second();
     let (time, state, counters) = (w.time(), w.state(h).unwrap(), w.counters());
     let err = w.step_until(1.0).unwrap_err();
     assert!(err.to_string().contains("load function"), "{err}");
@@ -426,19 +433,7 @@ fn a_failed_step_changes_nothing() {
 /// same way and hands the setting back as it found it.
 #[test]
 fn without_rollback_a_failed_step_stops_where_it_failed() {
-    let failing = || {
-        let mut w = world();
-        w.add_body(&floor()).unwrap();
-        let h = w
-            .add_body(&BodyDesc::new("b", ShapeDesc::sphere(0.1)).at([0.0, 0.0, 0.6]))
-            .unwrap();
-        w.set_load_fn(h, 100.0, |t, _| {
-            Load::force(DVec3::new(if t < 0.5 { 0.0 } else { f64::NAN }, 0.0, 0.0))
-        })
-        .unwrap();
-        w.step_until(0.2).unwrap();
-        w
-    };
+    let failing = || failing_at_half_a_second().0;
     let mut w = failing();
     assert!(w.rollback());
     w.set_rollback(false);
