@@ -346,6 +346,74 @@ pub fn shape_manifolds(
     tolerance: f64,
     cache: &mut ManifoldCache,
 ) -> Result<Vec<Manifold>, ManifoldError> {
+    pieces_manifolds(a, pose_a, b, pose_b, tolerance, cache, None)
+}
+
+/// How close a piece pair of two shapes comes when it holds no manifold within the tolerance
+/// asked ([`shape_manifolds_near`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PieceClearance {
+    /// The piece of `a` and the piece of `b`.
+    pub pieces: (u32, u32),
+    /// Their distance (above the tolerance).
+    pub gap: f64,
+    /// Unit direction from `a`'s closest point to `b`'s. The distance of two convex pieces is a
+    /// convex function of their relative translation, whose gradient this is: under a
+    /// translation `x` of `b` relative to `a`, the distance is at least `gap + direction·x`.
+    pub direction: DVec3,
+}
+
+/// The piece pairs of two shapes that hold no manifold within a tolerance
+/// ([`shape_manifolds_near`]): those whose distance was measured, and a lower bound on the
+/// distance of the others.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Clearances {
+    /// The piece pairs measured (their bounding spheres within the tolerance), each farther
+    /// apart than it.
+    pub measured: Vec<PieceClearance>,
+    /// The least distance of the pieces' bounding spheres over the pairs not measured (a lower
+    /// bound on their distance, above the tolerance); `∞` when every pair was measured.
+    pub unmeasured: f64,
+}
+
+impl Clearances {
+    /// Empty: no piece pair.
+    pub const NONE: Clearances = Clearances {
+        measured: Vec::new(),
+        unmeasured: f64::INFINITY,
+    };
+}
+
+/// [`shape_manifolds`], and in `clear` how close the piece pairs that hold no manifold come:
+/// what a caller that holds two compounds by their touching pieces needs to bound how soon
+/// another piece pair can touch.
+///
+/// # Errors
+/// As [`convex_manifold`].
+pub fn shape_manifolds_near(
+    a: &Shape,
+    pose_a: &Pose,
+    b: &Shape,
+    pose_b: &Pose,
+    tolerance: f64,
+    cache: &mut ManifoldCache,
+    clear: &mut Clearances,
+) -> Result<Vec<Manifold>, ManifoldError> {
+    clear.measured.clear();
+    clear.unmeasured = f64::INFINITY;
+    pieces_manifolds(a, pose_a, b, pose_b, tolerance, cache, Some(clear))
+}
+
+/// [`shape_manifolds_near`], the clearances optional.
+fn pieces_manifolds(
+    a: &Shape,
+    pose_a: &Pose,
+    b: &Shape,
+    pose_b: &Pose,
+    tolerance: f64,
+    cache: &mut ManifoldCache,
+    mut clear: Option<&mut Clearances>,
+) -> Result<Vec<Manifold>, ManifoldError> {
     check(pose_a, pose_b, tolerance)?;
     let (na, nb) = (a.pieces().len(), b.pieces().len());
     if cache.features.len() != na * nb {
@@ -356,7 +424,11 @@ pub fn shape_manifolds(
         let (wa, ca) = (*pose_a * pa.pose, pose_a.transform_point(pa.center));
         for (j, pb) in b.pieces().iter().enumerate() {
             let cb = pose_b.transform_point(pb.center);
-            if ca.distance(cb) - pa.radius - pb.radius > tolerance {
+            let spheres = ca.distance(cb) - pa.radius - pb.radius;
+            if spheres > tolerance {
+                if let Some(c) = clear.as_deref_mut() {
+                    c.unmeasured = c.unmeasured.min(spheres);
+                }
                 continue;
             }
             let wb = *pose_b * pb.pose;
@@ -366,6 +438,15 @@ pub fn shape_manifolds(
             if let Some(mut m) = convex_manifold(&pa.convex, &wa, &pb.convex, &wb, &c, tolerance)? {
                 m.pieces = (i as u32, j as u32);
                 out.push(m);
+            } else if let Some(clear) = clear.as_deref_mut() {
+                // No manifold: the pieces are farther apart than the tolerance, so their
+                // closest points are apart and give the direction.
+                let direction = (c.point_b - c.point_a).normalize_or_zero();
+                clear.measured.push(PieceClearance {
+                    pieces: (i as u32, j as u32),
+                    gap: c.distance,
+                    direction,
+                });
             }
         }
     }

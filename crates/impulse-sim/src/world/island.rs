@@ -4,7 +4,9 @@
 
 use glam::{DQuat, DVec3};
 use impulse_collide::feature::Feature;
-use impulse_collide::manifold::{self, ContactPoint, MAX_POINTS, Manifold, ManifoldCache};
+use impulse_collide::manifold::{
+    self, Clearances, ContactPoint, MAX_POINTS, Manifold, ManifoldCache,
+};
 use impulse_collide::shape::Convex;
 use impulse_response::{
     Contact, ContactFrame, IslandBody, SolveReport, SolverSettings, System, solve_island,
@@ -16,7 +18,7 @@ use super::envelope::Envelope;
 use super::held::{DueTimes, HeldSet, Island};
 use super::held_links::{predict_systems, write_members};
 use super::hold::PairContact;
-use super::hold::{TurnSide, approach_speed};
+use super::hold::{TurnSide, approach_speed, clearance_closing, near_gaps};
 use super::patch::{patch_plane_fit, patch_ranges, patch_targets};
 use crate::contact::response_body;
 use crate::error::SimError;
@@ -115,6 +117,9 @@ pub(super) struct HeldPair {
     /// fast-turning pair's, [`World::pair_contact`]); each is a patch of its own, starts cold
     /// and keeps no impulse.
     outside: Vec<Vec<ContactPoint>>,
+    /// How close the piece pairs of two compounds that do not touch are
+    /// ([`World::clearance_step`]): the step is cut to keep them apart.
+    near: Clearances,
     impulses: Vec<[DVec3; MAX_POINTS]>,
     cache: ManifoldCache,
     /// Length of the step the impulses were solved for (s), to scale the warm start to the
@@ -442,9 +447,13 @@ impl World {
                 PairContact::Held {
                     manifolds,
                     outside,
+                    near,
                     step,
                     fast,
-                } => (manifolds, outside, step, fast),
+                } => {
+                    self.islands.held.get_mut(&p).expect("listed above").near = near;
+                    (manifolds, outside, step, fast)
+                }
             };
             turning.push((p, step, fast));
             let held = self.islands.held.get_mut(&p).expect("listed above");
@@ -903,6 +912,9 @@ impl World {
             if closing > 0.0 {
                 fit = fit.min(self.envelope_left() / closing);
             }
+            // Likewise the piece pairs of two compounds that do not touch: each may close over
+            // the step by at most its clearance above the rest gap.
+            fit = fit.min(self.clearance_fit(island, &index, (&after_jolt, &bodies), h));
             // A speculative point's solve holds its mean speed over the step, which keeps its
             // gap at the end: a load that turns its approach around within the step (speed
             // u₀ < 0 at the start, u₁ > 0 at the end, changing linearly) takes the gap down to
@@ -1071,6 +1083,40 @@ impl World {
         let side = |k: usize| TurnSide::of(self.b(ids[k]), v[k].velocity, v[k].omega);
         let other = c.body2.map_or(TurnSide::NONE, side);
         approach_speed(&side(c.body1), &other, Some(c.normal))
+    }
+
+    /// The fraction of a step of length `h` that keeps every island pair's piece pairs that
+    /// do not touch ([`HeldPair::near`]) apart, their closing speed taken as the mean of the
+    /// step's start and end (`v`: the island's velocities at both; `index`: world id to island
+    /// body), each allowed its clearance above the rest gap; at least 1 when nothing closes.
+    fn clearance_fit(
+        &self,
+        island: &Island,
+        index: &FxHashMap<u32, usize>,
+        v: (&[IslandBody], &[IslandBody]),
+        h: f64,
+    ) -> f64 {
+        let rest = self.islands.settings.rest_gap_fraction * self.collision_epsilon();
+        let mut fit = f64::INFINITY;
+        for p in &island.pairs {
+            let near = &self.islands.held[p].near;
+            if near.measured.is_empty() && !near.unmeasured.is_finite() {
+                continue;
+            }
+            let side = |v: &[IslandBody], i: u32| {
+                let k = index[&i];
+                TurnSide::of(self.b(i), v[k].velocity, v[k].omega)
+            };
+            for (gap, direction) in near_gaps(near) {
+                let closing =
+                    |v: &[IslandBody]| clearance_closing(&side(v, p.0), &side(v, p.1), direction);
+                let travel = 0.5 * (closing(v.0) + closing(v.1)) * h;
+                if travel > 0.0 {
+                    fit = fit.min((gap - rest) / travel);
+                }
+            }
+        }
+        fit
     }
 
     /// The solver's frame of a contact with this normal ([`Contact::impulse`] is in its

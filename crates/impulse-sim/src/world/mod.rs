@@ -860,6 +860,8 @@ impl World {
 }
 
 #[cfg(test)]
+mod clearance_tests;
+#[cfg(test)]
 mod island_tests;
 #[cfg(test)]
 mod keys_tests;

@@ -134,3 +134,74 @@ fn a_compound_has_a_manifold_per_touching_piece() {
     assert_eq!(ms[0].pieces, (0, 0));
     assert_eq!(ms[0].points().len(), 2);
 }
+
+/// A compound of a bar lying on the floor within the tolerance, a block raised above it and a
+/// block above a far tile: [`shape_manifolds_near`] gives the bar's manifold, the raised
+/// block's distance to the floor and its direction exactly (a face over a face: its height
+/// above the floor), and for the piece pairs it did not measure a bound no greater than their
+/// brute-force distance and above the tolerance.
+#[test]
+fn a_compound_reports_how_close_its_other_pieces_are() {
+    let (fl, pf) = floor();
+    let tile = cuboid(DVec3::splat(0.05));
+    let tile_pose = Pose::from_translation(DVec3::new(3.0, 0.0, 0.05));
+    let ground = Shape::compound(vec![(pf, fl), (tile_pose, tile.clone())]).unwrap();
+    let (bar, block) = (
+        cuboid(DVec3::new(0.2, 0.02, 0.02)),
+        cuboid(DVec3::splat(0.02)),
+    );
+    let block_at = DVec3::new(0.3, 0.0, 0.03);
+    let l = Shape::compound(vec![
+        (Pose::IDENTITY, bar.clone()),
+        (Pose::from_translation(block_at), block.clone()),
+    ])
+    .unwrap();
+    let pl = Pose::from_translation(DVec3::new(0.0, 0.0, 0.02 + 0.5 * TOL));
+    let mut cache = ManifoldCache::default();
+    let mut near = Clearances::NONE;
+    let ms = shape_manifolds_near(
+        &l,
+        &pl,
+        &ground,
+        &Pose::IDENTITY,
+        TOL,
+        &mut cache,
+        &mut near,
+    )
+    .unwrap();
+    assert_eq!(ms.len(), 1);
+    assert_eq!(ms[0].pieces, (0, 0));
+    // The raised block's bottom face is 0.03 + 0.5·TOL above the floor's top face.
+    let raised: Vec<_> = near
+        .measured
+        .iter()
+        .filter(|c| c.pieces == (1, 0))
+        .collect();
+    assert_eq!(raised.len(), 1, "{near:?}");
+    assert!(
+        (raised[0].gap - (0.03 + 0.5 * TOL)).abs() < EXACT,
+        "{near:?}"
+    );
+    assert!(
+        (raised[0].direction - DVec3::NEG_Z).length() < EXACT,
+        "{near:?}"
+    );
+    // Every pair with the far tile went unmeasured: its bound is a lower bound.
+    assert!(near.measured.iter().all(|c| c.pieces.1 == 0), "{near:?}");
+    let world_tile = Pose::IDENTITY * tile_pose;
+    let truth = [
+        (Pose::IDENTITY, &bar),
+        (Pose::from_translation(block_at), &block),
+    ]
+    .iter()
+    .map(|(p, c)| brute::closest(poly(c), &(pl * *p), poly(&tile), &world_tile).distance)
+    .fold(f64::INFINITY, f64::min);
+    assert!(
+        near.unmeasured > TOL && near.unmeasured <= truth,
+        "bound {} against the distance {truth}",
+        near.unmeasured
+    );
+    // Without asking, the manifolds are the same.
+    let plain = shape_manifolds(&l, &pl, &ground, &Pose::IDENTITY, TOL, &mut cache).unwrap();
+    assert_eq!(plain, ms);
+}
