@@ -272,3 +272,62 @@ fn run_until_strike_stops_at_each_strike_with_it_resolved() {
     plain.run_until(1.0).unwrap();
     assert!(plain.limit_stats().strikes >= 3);
 }
+
+/// A slider set down on its stop slowly comes to rest there (the closed form's equilibrium:
+/// q = 0, v = 0 exactly), and from then on its steps integrate nothing: no derivative is
+/// evaluated while it rests, however long it is run, until a push lifts it off, when it
+/// moves as the closed form says again.
+#[test]
+fn a_joint_resting_on_its_stop_is_not_integrated_until_pushed_off() {
+    let m = 2.0;
+    let mut sim = Simulation::new(slider(m, 0.5), vec![1e-9], vec![0.0], tight()).unwrap();
+    sim.run_until(0.01).unwrap();
+    assert!(sim.is_resting_on_stop(0), "not at rest on its stop");
+    let (evaluations, resting) = (
+        sim.stats().derivative_evaluations,
+        sim.limit_stats().resting_steps,
+    );
+    for k in 1..=100 {
+        sim.run_until(0.01 + f64::from(k) * 0.01).unwrap();
+    }
+    assert_eq!((sim.q()[0], sim.v()[0]), (0.0, 0.0));
+    assert_eq!(sim.stats().derivative_evaluations, evaluations);
+    assert!(sim.limit_stats().resting_steps >= resting + 100);
+    let t_push = sim.time();
+    sim.set_applied_forces(&[2.0 * m * G]).unwrap();
+    sim.run_until(t_push + 0.1).unwrap();
+    let want = 0.5 * G * 0.1 * 0.1;
+    assert!(
+        (sim.q()[0] - want).abs() <= EXACT,
+        "lifted to {} against {want}",
+        sim.q()[0]
+    );
+}
+
+/// The travel recorded over steps that strike a stop (what a world checks its predictions
+/// against) holds only the motion taken: a slider dropped onto its stop at q = 0 never has a
+/// recorded state below it, through all its bounces. The bisection that locates a strike
+/// integrates trial steps past the stop; when their states were recorded, samples lay up to
+/// 1.5e-4 m below it.
+#[test]
+fn the_travel_of_a_struck_step_holds_no_state_beyond_the_stop() {
+    let mut sim = Simulation::new(slider(2.0, 0.5), vec![0.05], vec![0.0], tight()).unwrap();
+    sim.set_tracking(true);
+    let mut lowest = f64::INFINITY;
+    let mut samples = 0;
+    for k in 1..=500 {
+        sim.run_until(f64::from(k) * 1e-3).unwrap();
+        for travel in sim.take_travel().unwrap() {
+            for s in &travel.path {
+                lowest = lowest.min(s.origin.z);
+                samples += 1;
+            }
+        }
+    }
+    assert!(sim.limit_stats().strikes >= 3, "{:?}", sim.limit_stats());
+    assert!(samples > 1000, "{samples} samples");
+    assert!(
+        lowest >= -EXACT,
+        "a recorded state {lowest} m below the stop"
+    );
+}
