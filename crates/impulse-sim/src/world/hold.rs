@@ -182,10 +182,20 @@ impl World {
         // step is bounded by the curvature of its surface's motion. Each touching piece pair
         // approaches along its own normal; the other piece pairs of two compounds bound the
         // step by their clearance ([`Self::clearance_step`]).
-        let turn = found
-            .iter()
-            .map(|m| pair_turn(ba, bb, struck, Some(m.normal)))
-            .fold(0.0, f64::max);
+        let (mut turn, mut curve) = (0.0_f64, smooth_accel(ba) + smooth_accel(bb));
+        for m in &found {
+            let (sa, sb) = (
+                TurnSide::of_piece(ba, m.pieces.0, ba.velocity, ba.omega),
+                TurnSide::of_piece(bb, m.pieces.1, bb.velocity, bb.omega),
+            );
+            turn = turn.max(if struck {
+                sa.spin_reach + sb.spin_reach
+            } else {
+                approach_speed(&sa, &sb, Some(m.normal))
+            });
+            curve =
+                curve.max(sphere_piece_accel(ba, m.pieces.0) + sphere_piece_accel(bb, m.pieces.1));
+        }
         // Whether the pair is held at all is judged as before the clearance bound was known:
         // a compound by the whole relative speed of the centres. Judged by its touching
         // pieces' normals, more sliding compounds are held instead of given microcollisions,
@@ -201,7 +211,7 @@ impl World {
             let outside = vec![Vec::new(); found.len()];
             let step = self
                 .rotation_step(turn)
-                .min(self.curvature_step(smooth_accel(ba) + smooth_accel(bb)))
+                .min(self.curvature_step(curve))
                 .min(clear);
             return Ok(PairContact::Held {
                 manifolds: found,
@@ -426,6 +436,24 @@ fn smooth_accel(x: &crate::body::Body) -> f64 {
     if x.is_smooth() { spin_power(x, 2) } else { 0.0 }
 }
 
+/// How fast the turning of body `x` accelerates the surface of its piece `piece` when that
+/// piece is a sphere ([`TurnSide::of_piece`]): ‖ω‖² times the piece's reach (its centre's
+/// centripetal acceleration about the centre of mass, and its surface's about its centre);
+/// zero for any other piece, or a body that does not move.
+fn sphere_piece_accel(x: &crate::body::Body, piece: u32) -> f64 {
+    match (
+        x.shape.pieces().get(piece as usize),
+        x.reach.get(piece as usize),
+    ) {
+        (Some(p), Some(&r))
+            if x.takes_impulses() && !x.asleep && matches!(p.convex, Convex::Sphere(_)) =>
+        {
+            x.omega.length_squared() * r
+        }
+        _ => 0.0,
+    }
+}
+
 /// How fast rotation can accelerate the two bodies' surfaces: Σ ‖ω‖²·r over both (the
 /// centripetal acceleration of the farthest point of each), the curvature of the motion a
 /// step's linear prediction misses.
@@ -486,6 +514,32 @@ impl TurnSide {
         spin_reach: 0.0,
         piece_reach: 0.0,
     };
+
+    /// [`Self::of`] for the side of a contact on piece `piece` of body `x`. A sphere piece
+    /// anywhere on its body (a mallet's head on its rod) turns about its own centre without
+    /// bringing any other feature of itself: its side is its centre's velocity, with no turn
+    /// (what another piece of the body brings is the clearance bound's,
+    /// [`World::clearance_step`], and the curvature of the centre's path is
+    /// [`sphere_piece_accel`]'s).
+    pub(super) fn of_piece(
+        x: &crate::body::Body,
+        piece: u32,
+        velocity: DVec3,
+        omega: DVec3,
+    ) -> Self {
+        let side = Self::of(x, velocity, omega);
+        match x.shape.pieces().get(piece as usize) {
+            Some(p) if x.takes_impulses() && !x.asleep && matches!(p.convex, Convex::Sphere(_)) => {
+                let arm = x.pose.rotation * p.pose.translation;
+                Self {
+                    velocity: velocity + omega.cross(arm),
+                    spin_reach: 0.0,
+                    ..side
+                }
+            }
+            _ => side,
+        }
+    }
 
     /// Body `x` moving at `velocity` and `omega` (its own, or a step's trial velocities).
     pub(super) fn of(x: &crate::body::Body, velocity: DVec3, omega: DVec3) -> Self {

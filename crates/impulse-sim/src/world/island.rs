@@ -904,8 +904,9 @@ impl World {
                 .iter()
                 .zip(&origin)
                 .filter(|(_, (p, _, _))| fast_pairs.binary_search(p).is_err())
-                .map(|(c, _)| {
-                    let turn = |v: &[IslandBody]| self.contact_turn(&ids, v, c);
+                .map(|(c, &(p, m, _))| {
+                    let pieces = self.islands.held[&p].manifolds[m].pieces;
+                    let turn = |v: &[IslandBody]| self.contact_turn(&ids, v, c, pieces);
                     0.5 * (turn(&after_jolt) + turn(&bodies)) * h
                 })
                 .fold(0.0, f64::max);
@@ -1079,10 +1080,13 @@ impl World {
     /// How fast another feature of a held contact's pair can approach with the island's
     /// bodies at velocities `v` (`ids`: their world ids), as [`super::hold::turn_speed`]
     /// measures a pair.
-    fn contact_turn(&self, ids: &[u32], v: &[IslandBody], c: &Contact) -> f64 {
-        let side = |k: usize| TurnSide::of(self.b(ids[k]), v[k].velocity, v[k].omega);
-        let other = c.body2.map_or(TurnSide::NONE, side);
-        approach_speed(&side(c.body1), &other, Some(c.normal))
+    /// `pieces`: the pieces of its manifold (body 2's, body 1's: the pair's order).
+    fn contact_turn(&self, ids: &[u32], v: &[IslandBody], c: &Contact, pieces: (u32, u32)) -> f64 {
+        let side = |k: usize, piece: u32| {
+            TurnSide::of_piece(self.b(ids[k]), piece, v[k].velocity, v[k].omega)
+        };
+        let other = c.body2.map_or(TurnSide::NONE, |k| side(k, pieces.0));
+        approach_speed(&side(c.body1, pieces.1), &other, Some(c.normal))
     }
 
     /// The fraction of a step of length `h` that keeps every island pair's piece pairs that
