@@ -16,6 +16,7 @@ use rustc_hash::FxHashMap;
 use super::World;
 use super::envelope::Envelope;
 use super::held::{DueTimes, HeldSet, Island};
+use super::held_links::SystemSource;
 use super::held_links::{predict_systems, write_members};
 use super::hold::PairContact;
 use super::hold::{TurnSide, approach_speed, clearance_closing, near_gaps};
@@ -131,6 +132,63 @@ pub(super) struct HeldPair {
     struck: bool,
     /// The last step was cut short by a slip → stick transition.
     cut: bool,
+}
+
+/// What planning an island step counted ([`World::plan_island`]), added to the world's
+/// [`super::Counters`] in island order.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct PlanCounts {
+    transients: u64,
+    struck_steps: u64,
+    long_steps: u64,
+    fitted_steps: u64,
+    located_steps: u64,
+    rounded_transitions: u64,
+    island_solves: u64,
+    island_sweeps: u64,
+    unconverged_solves: u64,
+    direct_solves: u64,
+}
+
+impl PlanCounts {
+    /// Adds these counts to the world's.
+    fn add_to(&self, c: &mut super::Counters) {
+        c.transients += self.transients;
+        c.struck_steps += self.struck_steps;
+        c.long_steps += self.long_steps;
+        c.fitted_steps += self.fitted_steps;
+        c.located_steps += self.located_steps;
+        c.rounded_transitions += self.rounded_transitions;
+        c.island_solves += self.island_solves;
+        c.island_sweeps += self.island_sweeps;
+        c.unconverged_solves += self.unconverged_solves;
+        c.direct_solves += self.direct_solves;
+    }
+}
+
+/// An island's step as planned ([`World::plan_island`]), to be applied
+/// ([`World::apply_island`]).
+pub(super) struct IslandPlan {
+    /// The step's length.
+    h: f64,
+    /// The solver's bodies (world ids) and their velocities after the step.
+    ids: Vec<u32>,
+    bodies: Vec<IslandBody>,
+    /// Their velocities after the step without contact.
+    predicted: Vec<IslandBody>,
+    /// Their velocities after the impulsive solve of a strike (before the step).
+    after_jolt: Vec<IslandBody>,
+    /// The island's multibodies after that solve, and where each came from.
+    systems_after_jolt: Vec<System>,
+    sources: Vec<SystemSource>,
+    /// The contacts with their impulses over the step, and each one's pair, manifold and point.
+    solution: Vec<Contact>,
+    origin: Vec<((u32, u32), usize, usize)>,
+    /// Whether a direct solve was tried and held.
+    direct_outcome: Option<bool>,
+    /// The island's key body and its direct-solve backoff before the step.
+    key: u32,
+    backoff: Option<(u32, f64)>,
 }
 
 /// The islands' state in a world.
@@ -596,11 +654,52 @@ impl World {
     fn step_island(
         &mut self,
         island: &Island,
-        mut h0: f64,
+        h0: f64,
         fast: bool,
         fast_pairs: &[(u32, u32)],
         rest: Option<f64>,
     ) -> Result<f64, SimError> {
+        let (_, ids) = self.island_ids(island);
+        let systems = self.island_systems(&ids)?;
+        let mut counts = PlanCounts::default();
+        let plan = self.plan_island(island, h0, fast, fast_pairs, rest, systems, &mut counts);
+        counts.add_to(&mut self.counters);
+        self.apply_island(plan?)
+    }
+
+    /// The island's bodies in the solver's order (its own, then the fixed and scripted ones
+    /// its pairs touch, in pair order), and each one's place.
+    fn island_ids(&self, island: &Island) -> (FxHashMap<u32, usize>, Vec<u32>) {
+        let mut index: FxHashMap<u32, usize> = FxHashMap::default();
+        let mut ids: Vec<u32> = Vec::new();
+        for &i in island
+            .bodies
+            .iter()
+            .chain(island.pairs.iter().flat_map(|p| [&p.0, &p.1]))
+        {
+            index.entry(i).or_insert_with(|| {
+                ids.push(i);
+                ids.len() - 1
+            });
+        }
+        (index, ids)
+    }
+
+    /// The read-only part of [`Self::step_island`]: the island's contacts solved over the
+    /// coming step (the step located, cut to fit), with `systems` its multibodies' jointed
+    /// systems ([`Self::island_systems`]); what it counted goes to `counts`. It reads only its
+    /// own island's bodies and pairs and the fixed bodies they touch.
+    #[allow(clippy::too_many_arguments)]
+    fn plan_island(
+        &self,
+        island: &Island,
+        mut h0: f64,
+        fast: bool,
+        fast_pairs: &[(u32, u32)],
+        rest: Option<f64>,
+        (mut systems, sources): (Vec<System>, Vec<SystemSource>),
+        counts: &mut PlanCounts,
+    ) -> Result<IslandPlan, SimError> {
         let settings = self.islands.settings;
         let v_micro = self.micro_speed();
         let v_s = self.switch_speed();
@@ -738,7 +837,6 @@ impl World {
         let patches = patch_ranges(&origin);
         let eps = self.collision_epsilon();
         // The multibodies of the island's links, as jointed systems (`held_links.rs`).
-        let (mut systems, sources) = self.island_systems(&ids)?;
         write_members(&systems, &mut bodies);
         // Points beyond the envelope are speculative: they only keep the step from closing
         // their gap (below).
@@ -748,7 +846,7 @@ impl World {
         // Transients: a held contact approaching (faster than STRUCK_FRACTION·v_s) gets an
         // impulsive solve of its island first (e = 0 between held contacts): the island reacts
         // to a strike at once, through its constraints, not over a step.
-        let transients_before = self.counters.transients;
+        let mut struck = false;
         let approach = contacts
             .iter()
             .zip(&speculative)
@@ -770,8 +868,9 @@ impl World {
                 c.impulse = DVec3::ZERO;
                 c.target_normal_velocity = target;
             }
-            self.solve(&mut bodies, &mut systems, &mut jolt, &solver)?;
-            self.counters.transients += 1;
+            self.solve(&mut bodies, &mut systems, &mut jolt, &solver, counts)?;
+            counts.transients += 1;
+            struck = true;
             // The step was chosen from the speeds before the strike: it must not let what the
             // strike changed carry a surface through the rest of the envelope (a coin struck
             // by another falling on it went 4 ε_c into the plate within the 0.4 ms chosen
@@ -787,7 +886,7 @@ impl World {
             if change > 0.0 {
                 let allowed = STRIKE_STEP_FRACTION * self.envelope_left() / change;
                 if allowed < h0 {
-                    self.counters.struck_steps += 1;
+                    counts.struck_steps += 1;
                 }
                 h0 = h0.min(allowed.max(settings.min_step));
             }
@@ -796,7 +895,6 @@ impl World {
         // speculative point, no strike) takes the long step, its warm start scaled to it.
         if let Some(long) = rest {
             let asks = patch_targets(&contacts, &patches, &gaps, |g| self.stabilisation_speed(g));
-            let struck = self.counters.transients > transients_before;
             if !struck
                 && !speculative.iter().any(|&s| s)
                 && asks.iter().all(|&a| a <= solver.tolerance)
@@ -805,7 +903,7 @@ impl World {
                     c.impulse *= long / h0;
                 }
                 h0 = long;
-                self.counters.long_steps += 1;
+                counts.long_steps += 1;
             }
         }
         let after_jolt = bodies.clone();
@@ -878,7 +976,7 @@ impl World {
                 }
             }
             let mut trial = contacts.clone();
-            let report = self.solve(&mut bodies, &mut systems, &mut trial, &solver)?;
+            let report = self.solve(&mut bodies, &mut systems, &mut trial, &solver, counts)?;
             // A direct solve that failed on this island fails again on the same contacts cut
             // to a shorter step: the re-solves that locate a transition go without it.
             if report.direct_tried {
@@ -934,7 +1032,7 @@ impl World {
             }
             if fit < 1.0 && tries <= MAX_LOCATE_SOLVES && h > settings.min_step {
                 if tries == 1 {
-                    self.counters.fitted_steps += 1;
+                    counts.fitted_steps += 1;
                 }
                 let cut = (h * fit).max(settings.min_step);
                 for (c, sol) in contacts.iter_mut().zip(&solved.1) {
@@ -985,18 +1083,53 @@ impl World {
             // Cut again while a patch still sticks inside its cone (several points share
             // a patch's load unevenly, so one cut may stop short).
             if s >= LOCATE_DONE {
-                self.counters.rounded_transitions += rounded;
+                counts.rounded_transitions += rounded;
                 break;
             }
             if !located {
                 located = true;
-                self.counters.located_steps += 1;
+                counts.located_steps += 1;
             }
             h = (s * h).max(MIN_STEP_FRACTION * settings.step);
             for (c, sol) in contacts.iter_mut().zip(&solved.1) {
                 c.impulse = sol.impulse * s;
             }
         }
+        let (predicted, solution) = solved;
+        Ok(IslandPlan {
+            h,
+            ids,
+            bodies,
+            predicted,
+            after_jolt,
+            systems_after_jolt,
+            sources,
+            solution,
+            origin,
+            direct_outcome,
+            key,
+            backoff,
+        })
+    }
+
+    /// The writing part of [`Self::step_island`]: the plan's direct-solve outcome, its
+    /// bodies' velocities and held loads, its links' loads, its impulses for the next warm
+    /// start; returns the step's length.
+    fn apply_island(&mut self, plan: IslandPlan) -> Result<f64, SimError> {
+        let IslandPlan {
+            h,
+            ids,
+            bodies,
+            predicted,
+            after_jolt,
+            systems_after_jolt,
+            sources,
+            solution,
+            origin,
+            direct_outcome,
+            key,
+            backoff,
+        } = plan;
         match direct_outcome {
             Some(true) => {
                 self.islands.direct_backoff.remove(&key);
@@ -1009,7 +1142,6 @@ impl World {
             }
             None => {}
         }
-        let (predicted, solution) = solved;
         // Held loads: the impulse of the step spread over it.
         for (k, &i) in ids.iter().enumerate() {
             let b = self.b(i);
@@ -1145,15 +1277,15 @@ impl World {
 
     /// Solves an island's contacts and counts what the solve did.
     fn solve(
-        &mut self,
+        &self,
         bodies: &mut [IslandBody],
         systems: &mut [System],
         contacts: &mut [Contact],
         solver: &SolverSettings,
+        c: &mut PlanCounts,
     ) -> Result<SolveReport, SimError> {
         let report = solve_island(bodies, systems, contacts, solver)
             .map_err(|e| self.runtime(format!("island contact solve: {e}")))?;
-        let c = &mut self.counters;
         c.island_solves += 1;
         c.island_sweeps += report.iterations as u64;
         c.unconverged_solves += u64::from(!report.converged);
