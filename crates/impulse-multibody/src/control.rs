@@ -710,11 +710,22 @@ impl Simulation {
     /// Every link's kinematics now (in link order): pose, velocity, angular velocity and the
     /// acceleration of its frame origin under the forces held now (gravity, passive
     /// elements, applied forces and controller outputs; a joint resting on a stop is not
-    /// held here). What a hybrid event loop predicts the links' next motion from.
+    /// held here, but a multibody every joint of which rests on its stop, at rest, has no
+    /// acceleration: its state is a fixed point of its motion). What a hybrid event loop
+    /// predicts the links' next motion from.
     ///
     /// # Errors
     /// [`MultibodyError::SingularInertia`] for a non-finite state.
     pub fn link_kinematics(&mut self) -> Result<Vec<LinkKinematics>, MultibodyError> {
+        if self.all_resting() {
+            self.ws.update_kinematics(&self.model, &self.q, &self.v)?;
+            let mut at_rest = crate::travel::kinematics(&self.model, &mut self.ws);
+            for k in &mut at_rest {
+                k.acceleration = glam::DVec3::ZERO;
+                k.angular_acceleration = glam::DVec3::ZERO;
+            }
+            return Ok(at_rest);
+        }
         let mut vdot = vec![0.0; self.model.nv()];
         self.tau.copy_from_slice(&self.held);
         self.model

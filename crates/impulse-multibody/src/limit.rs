@@ -407,7 +407,7 @@ impl crate::Simulation {
 
     /// Whether every degree of freedom is a joint resting on a stop (no free base, one resting
     /// stop per joint velocity).
-    fn all_resting(&self) -> bool {
+    pub(crate) fn all_resting(&self) -> bool {
         let nv = self.model.nv();
         self.model.base_dofs() == 0
             && nv > 0
