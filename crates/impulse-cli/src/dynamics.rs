@@ -132,6 +132,9 @@ pub fn run(args: &DynamicsArgs) -> Result<String, String> {
         let rows: Vec<Vec<f64>> = (0..nv)
             .map(|r| (0..nv).map(|c| m[(r, c)]).collect())
             .collect();
+        for row in &rows {
+            finite(&model, "mass matrix entry", row)?;
+        }
         return to_json("M", serde_json::json!(rows));
     }
     let qd = vector(
@@ -152,6 +155,7 @@ pub fn run(args: &DynamicsArgs) -> Result<String, String> {
         let mut tau = vec![0.0; nv];
         inverse_dynamics(&model, &mut ws, &q, &qd, &qdd, None, &mut tau)
             .map_err(|e| e.to_string())?;
+        finite(&model, "tau", &tau)?;
         return to_json("tau", serde_json::json!(tau));
     }
     if args.qdd.is_some() {
@@ -166,7 +170,27 @@ pub fn run(args: &DynamicsArgs) -> Result<String, String> {
     )?;
     let mut qdd = vec![0.0; nv];
     forward_dynamics(&model, &mut ws, &q, &qd, &tau, None, &mut qdd).map_err(|e| e.to_string())?;
+    finite(&model, "qdd", &qdd)?;
     to_json("qdd", serde_json::json!(qdd))
+}
+
+/// Refuses a result with a non-number in it (JSON would print `null`), naming the quantity
+/// and the coordinate: inputs whose products overflow double precision (a velocity of 1e200
+/// squared in the Coriolis terms, torques near the largest double) give infinities.
+fn finite(model: &Model, quantity: &str, values: &[f64]) -> Result<(), String> {
+    let Some(k) = values.iter().position(|x| !x.is_finite()) else {
+        return Ok(());
+    };
+    let base = if model.is_floating() { 6 } else { 0 };
+    let coordinate = match k.checked_sub(base) {
+        Some(j) => format!("joint `{}`", model.joint_names()[j]),
+        None => format!("base coordinate {k}"),
+    };
+    Err(format!(
+        "{quantity} of {coordinate} is {}: the inputs overflow double precision (every \
+         input must be small enough that its squares and products stay finite)",
+        values[k]
+    ))
 }
 
 fn load(path: &Path, base: BaseKind) -> Result<Model, String> {

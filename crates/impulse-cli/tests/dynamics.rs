@@ -167,6 +167,29 @@ fn bad_input_fails_naming_the_option() {
     assert!(out.stderr.contains("robot.urdf"));
 }
 
+/// Finite inputs whose products overflow (a velocity of 1e200 in the Coriolis terms, torques
+/// at the largest double) give no `null` in the JSON: the command fails, naming the quantity
+/// and the joint; the closed form at the same inputs is not finite either. Before this check
+/// it printed `{"qdd": [null, null]}` and exited 0.
+#[test]
+fn overflowing_inputs_fail_naming_the_quantity_and_joint() {
+    let p = Pendulum { g: 9.81 };
+    assert!(!p.qdd([0.0, 0.0], [1e200, 1e200], [0.0, 0.0])[0].is_finite());
+    for (args, quantity) in [
+        (&["--qd", "1e200,1e200"][..], "qdd of joint `shoulder`"),
+        (&["--tau", "1e308,1e308"][..], "qdd of joint `shoulder`"),
+        (
+            &["--inverse", "--qd", "1e200,0", "--qdd", "0,0"][..],
+            "tau of joint `shoulder`",
+        ),
+    ] {
+        let out = run(args);
+        assert!(!out.ok, "{args:?} should fail");
+        assert!(out.json.is_none(), "{args:?}: printed {:?}", out.json);
+        assert!(out.stderr.contains(quantity), "{args:?}: {}", out.stderr);
+    }
+}
+
 /// A bad model: the error names the link (the massless root cannot float).
 #[test]
 fn model_errors_name_the_link() {
