@@ -464,6 +464,21 @@ fn simulate(
             sim.step();
             sim.internal_poses(&mut internal);
         });
+        // A state that left double precision (a load of 1e300 N) stays so: stop at once,
+        // naming the link and the time, rather than print NaN for the end effector.
+        let ends = (0..sim.model.end_effectors.len()).map(|i| sim.end_effector_pose(i));
+        if let Some((n, _)) = ends
+            .chain(internal.iter().copied())
+            .enumerate()
+            .find(|(_, p)| !(p.translation.is_finite() && p.rotation.is_finite()))
+        {
+            return Err(format!(
+                "the reduced model's state is not finite at t = {} s (step {k}): link `{}` has \
+                 no finite pose; the loads or the step are too large for double precision",
+                crate::text::significant(k as f64 * args.dt),
+                names[n]
+            ));
+        }
         // A stop request is polled every STOP_POLL_STEPS steps (a clock read costs about as
         // much as a small mechanism's step).
         if k % STOP_POLL_STEPS == 0 && k < steps {

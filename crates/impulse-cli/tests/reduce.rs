@@ -539,3 +539,37 @@ fn a_wall_time_limit_stops_the_run_with_valid_outputs() {
         );
     }
 }
+
+/// A finite load too large for double precision (1e300 N on the helix's tip) makes the reduced
+/// state non-finite at the first step: the run fails naming the link and the time, and prints
+/// no `NaN` (it printed `"end_effector_0": [NaN, NaN, NaN]`, not even JSON, and exited 0).
+/// The same load at 1 N runs and ends finite.
+#[test]
+fn a_load_that_overflows_fails_naming_the_link_and_time() {
+    let run = |load: &str| {
+        impulse(&[
+            "reduce",
+            &mechanism("helix-100.ron"),
+            "--load",
+            load,
+            "--until",
+            "0.01",
+        ])
+    };
+    let out = run("l100:1e300,0,0");
+    assert!(!out.ok);
+    assert!(out.json.is_none(), "printed {:?}", out.json);
+    assert!(
+        out.stderr.contains("not finite at t = 0.00100 s") && out.stderr.contains("`l100`"),
+        "{}",
+        out.stderr
+    );
+    let out = run("l100:1,0,0");
+    assert!(out.ok, "{}", out.stderr);
+    let json = out.json.expect("JSON");
+    let ee = json["end_effector_0"].as_array().expect("a point");
+    assert!(
+        ee.iter().all(|x| x.as_f64().is_some_and(f64::is_finite)),
+        "{ee:?}"
+    );
+}
