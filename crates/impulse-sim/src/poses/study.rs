@@ -28,7 +28,11 @@ pub struct DropSettings {
     pub friction: f64,
     /// Restitution between part and belt. Default `0.3`.
     pub restitution: f64,
-    /// Collision epsilon ε_c (m); `None`: [`EPSILON_REL`] of the part's diameter.
+    /// Collision epsilon ε_c (m); `None`: [`EPSILON_REL`] of the part's diameter. A study
+    /// file leaves it out when it is `None` (as a drop's outcome leaves out its `start` and
+    /// `facet`): the file holds no `null` where a number belongs; a file written with `null`
+    /// reads the same.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub collision_epsilon: Option<f64>,
     /// Whether every other drop starts at rest on a stable facet (the upper belt) rather than
     /// uniform on SO(3), for the belt-fed estimate. Default `true`.
@@ -107,8 +111,10 @@ pub struct DropOutcome {
     pub index: u64,
     /// The stable facet (hull face) the drop started at rest on (a belt drop); `None` for a
     /// start uniform on SO(3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start: Option<u32>,
     /// The hull face the part rests on; `None` when it did not settle on a facet.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub facet: Option<u32>,
     /// Whether the part came to rest (slept) within [`DropSettings::max_time`].
     pub settled: bool,

@@ -380,3 +380,45 @@ fn a_drops_scene_replays_the_drop_exactly() {
         );
     }
 }
+
+/// A study file holds no `null`: the outcomes' `start` and `facet` and the settings' ε_c are
+/// left out when they are `None`, and read back as `None`; a file written with `null` (as
+/// every study file was before) reads the same.
+#[test]
+fn a_study_file_holds_no_null_and_reads_the_old_form() {
+    let outcome = |index: u64, start: Option<u32>, facet: Option<u32>| DropOutcome {
+        index,
+        start,
+        facet,
+        settled: facet.is_some(),
+        time: 0.5,
+        rotation: [0.0, 0.0, 0.0, 1.0],
+    };
+    let file = StudyFile {
+        part: "cube".into(),
+        settings: DropSettings::default(),
+        seed: 1,
+        drops: 3,
+        stable: vec![(0, 0.5), (1, 0.5)],
+        outcomes: vec![
+            outcome(0, None, Some(1)),
+            outcome(1, Some(0), None),
+            outcome(2, None, None),
+        ],
+    };
+    let text = serde_json::to_string_pretty(&file).unwrap();
+    assert!(!text.contains("null"), "{text}");
+    let back: StudyFile = serde_json::from_str(&text).unwrap();
+    assert_eq!(back, file);
+    let mut old: serde_json::Value = serde_json::from_str(&text).unwrap();
+    old["settings"]["collision_epsilon"] = serde_json::Value::Null;
+    for o in old["outcomes"].as_array_mut().unwrap() {
+        for key in ["start", "facet"] {
+            if o.get(key).is_none() {
+                o[key] = serde_json::Value::Null;
+            }
+        }
+    }
+    let old: StudyFile = serde_json::from_value(old).unwrap();
+    assert_eq!(old, file);
+}
