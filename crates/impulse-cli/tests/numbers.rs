@@ -23,10 +23,8 @@ fn non_number(token: &str) -> bool {
 fn check_json(v: &serde_json::Value, path: &str, bad: &mut Vec<String>) {
     match v {
         serde_json::Value::Null => bad.push(format!("{path}: null")),
-        serde_json::Value::Number(n) => {
-            if !n.as_f64().is_some_and(f64::is_finite) {
-                bad.push(format!("{path}: {n}"));
-            }
+        serde_json::Value::Number(n) if !n.as_f64().is_some_and(f64::is_finite) => {
+            bad.push(format!("{path}: {n}"));
         }
         serde_json::Value::String(s) if non_number(s) => bad.push(format!("{path}: {s:?}")),
         serde_json::Value::Array(a) => {
