@@ -6,7 +6,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use impulse_sim::poses::{self, DropSettings, PosePart, Shard, StudyFile};
+use impulse_sim::batch::RunHooks;
+use impulse_sim::poses::{self, DropOutcome, DropSettings, PosePart, Shard, StudyFile};
 
 use crate::progress::Progress;
 
@@ -57,8 +58,16 @@ pub struct PosesArgs {
     #[arg(long, value_name = "K/N")]
     shard: Option<String>,
     /// Write every drop's outcome to this JSON file (the input of `merge` and `--from`).
+    /// While the study runs, each finished drop is kept in OUT.partial: a study stopped by
+    /// Ctrl-C, `--max-wall` or a kill and run again with the same arguments runs only the
+    /// drops it had not finished.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Stop cleanly after this many wall-clock seconds: no drop starts after it, the drops
+    /// done are summarised, and with `--out` kept in OUT.partial for the same command to
+    /// finish the study. Ctrl-C does the same (exit 130).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    max_wall: Option<f64>,
     /// Summarise the drops of this JSON file (a run's or a merge's `--out`) instead of
     /// dropping.
     #[arg(long, conflicts_with_all = [
@@ -140,33 +149,117 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
     }
     let shard = crate::study_io::shard_arg(args.shard.as_deref())?;
     let started = Instant::now();
+    let (mut stopped, mut resumed_note): (Option<String>, Option<String>) = (None, None);
     let (file, ran) = match &args.from {
         Some(path) => (read_study(path)?, false),
         None => {
             if args.drops == 0 {
                 return Err("--drops 0: a study needs at least one drop".into());
             }
+            if let Some(w) = args.max_wall
+                && !(w.is_finite() && w > 0.0)
+            {
+                return Err(format!(
+                    "--max-wall {w}: must be a positive number of seconds"
+                ));
+            }
             let threads = args
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            let mine = shard.runs_of(args.drops);
-            let bar = Progress::count("impulse poses", mine, "drops");
-            let progress = |done: u64| bar.set(done);
-            let outcomes = poses::run_drops(
-                &part, &settings, args.seed, args.drops, shard, threads, &progress,
-            )
-            .map_err(|e| e.to_string())?;
-            bar.finish();
-            let file = StudyFile {
+            let mut file = StudyFile {
                 part: part.name.clone(),
                 settings,
                 seed: args.seed,
                 drops: args.drops,
                 stable: StudyFile::fingerprint(&part),
-                outcomes,
+                outcomes: Vec::new(),
             };
-            if let Some(out) = &args.out {
-                crate::study_io::write_json(out, &file)?;
+            let journal = match &args.out {
+                Some(out) => {
+                    let header = serde_json::to_string(&serde_json::json!({
+                        "journal": "impulse poses",
+                        "shard": [shard.index, shard.count],
+                        "study": &file,
+                    }))
+                    .map_err(|e| e.to_string())?;
+                    let (journal, before) =
+                        crate::study_io::Journal::open::<DropOutcome>(out, &header)?;
+                    file.outcomes = before;
+                    Some(journal)
+                }
+                None => None,
+            };
+            file.outcomes.sort_by_key(|d| d.index);
+            file.outcomes.dedup_by_key(|d| d.index);
+            let resumed = file.outcomes.len() as u64;
+            let mine = shard.runs_of(args.drops);
+            let bar = Progress::count("impulse poses", mine, "drops");
+            let progress = |done: u64| bar.set(resumed + done);
+            let before: Vec<u64> = file.outcomes.iter().map(|d| d.index).collect();
+            crate::interrupt::install();
+            let wall = Instant::now();
+            let stop = || {
+                crate::interrupt::requested()
+                    || args
+                        .max_wall
+                        .is_some_and(|w| wall.elapsed().as_secs_f64() >= w)
+            };
+            let record = |_: u64, d: &DropOutcome| {
+                if let Some(j) = &journal {
+                    j.record(d);
+                }
+            };
+            let hooks = RunHooks {
+                progress: &progress,
+                skip: &|i| before.binary_search(&i).is_ok(),
+                stop: &stop,
+                record: &record,
+            };
+            let now = poses::run_drops_with(
+                &part, &settings, args.seed, args.drops, shard, threads, &hooks,
+            )
+            .map_err(|e| e.to_string())?;
+            bar.finish();
+            if let Some(j) = &journal {
+                j.check()?;
+            }
+            file.outcomes.extend(now.into_iter().map(|(_, d)| d));
+            file.outcomes.sort_by_key(|d| d.index);
+            let done = file.outcomes.len() as u64;
+            if done == mine {
+                if let (Some(out), Some(j)) = (&args.out, journal) {
+                    crate::study_io::write_json(out, &file)?;
+                    j.remove()?;
+                }
+            } else {
+                let why = if crate::interrupt::requested() {
+                    "interrupted (Ctrl-C or SIGTERM)"
+                } else {
+                    "at the wall-time limit (--max-wall)"
+                };
+                let kept = match &args.out {
+                    Some(out) => format!(
+                        "they are kept in {}: the same command runs the other {} and writes {}",
+                        crate::study_io::Journal::path_for(out).display(),
+                        mine - done,
+                        out.display()
+                    ),
+                    None => "without --out they are not kept".to_owned(),
+                };
+                stopped = Some(format!(
+                    "stopped:          {why}, after {done} of {mine} drops; {kept}"
+                ));
+            }
+            if resumed > 0 {
+                resumed_note = Some(format!(
+                    "resumed:          {resumed} drops read back from {}, {} run now",
+                    args.out
+                        .as_deref()
+                        .map(crate::study_io::Journal::path_for)
+                        .unwrap_or_default()
+                        .display(),
+                    done - resumed
+                ));
             }
             (file, true)
         }
@@ -178,6 +271,12 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
             file.part,
             part.name,
         ));
+    }
+    if file.outcomes.is_empty()
+        && let Some(note) = &stopped
+    {
+        // Nothing to summarise: say where it stopped.
+        return Ok(note.clone());
     }
     let wall = started.elapsed().as_secs_f64();
     let summary = poses::summarize(
@@ -294,8 +393,18 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
         "not classified: {} unsettled after {} s, {} at rest off every facet",
         summary.unsettled, file.settings.max_time, summary.unclassified
     );
-    if let Some(out) = &args.out {
-        let _ = write!(t, "\noutcomes:         {}", out.display());
+    if let Some(note) = &resumed_note {
+        let _ = write!(t, "\n{note}");
+    }
+    match &stopped {
+        Some(note) => {
+            let _ = write!(t, "\n{note}");
+        }
+        None => {
+            if let Some(out) = &args.out {
+                let _ = write!(t, "\noutcomes:         {}", out.display());
+            }
+        }
     }
     Ok(t)
 }

@@ -159,3 +159,129 @@ fn a_drops_scene_runs_in_impulse_run() {
         "the part is at rest: {out}"
     );
 }
+
+/// The drop count of the resumable studies below, and their part: 2 000 drops of the cube
+/// run in a few seconds.
+const RESUMED_DROPS: &str = "2000";
+
+/// The number after `key` in the line of `stdout` that starts with `line`.
+fn count_after(stdout: &str, line: &str, key: &str) -> Option<u64> {
+    let l = stdout.lines().find(|l| l.starts_with(line))?;
+    let rest = &l[l.find(key)? + key.len()..];
+    rest.split_whitespace().next()?.parse().ok()
+}
+
+/// A study stopped at a wall-time limit, then one killed (SIGKILL) mid-run, then run again
+/// with the same arguments: each rerun reads back the drops finished before and runs only the
+/// others, and the final file equals, byte for byte, the file of the same study never
+/// stopped. The stopped run says so and names the journal.
+#[test]
+fn a_stopped_or_killed_study_run_again_does_only_the_missing_drops() {
+    let dir = common::Scratch::new("poses-resume");
+    let cube = part("cube.ron");
+    let c = cube.to_str().unwrap();
+    let whole = dir.join("whole.json");
+    let (ok, _, err) = impulse(&[
+        "poses",
+        c,
+        "--drops",
+        RESUMED_DROPS,
+        "--out",
+        whole.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let reference = std::fs::read(&whole).unwrap();
+    // Stopped at the wall-time limit.
+    let out = dir.join("stopped.json");
+    let o = out.to_str().unwrap();
+    let args = ["poses", c, "--drops", RESUMED_DROPS, "--out", o];
+    let limited: Vec<&str> = args.iter().copied().chain(["--max-wall", "0.2"]).collect();
+    let (ok, stdout, err) = impulse(&limited);
+    assert!(ok, "{err}");
+    let done = count_after(&stdout, "stopped:", "after ").expect("a stopped line");
+    assert!(done > 0 && done < 2000, "{stdout}");
+    assert!(
+        !out.exists(),
+        "the study's file is written only when it is whole"
+    );
+    let journal = dir.join("stopped.json.partial");
+    let lines = std::fs::read_to_string(&journal).unwrap().lines().count() as u64;
+    assert_eq!(lines, done + 1, "a header and one line per drop done");
+    let (ok, stdout, err) = impulse(&args);
+    assert!(ok, "{err}");
+    assert_eq!(
+        count_after(&stdout, "resumed:", "resumed:"),
+        Some(done),
+        "{stdout}"
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), reference);
+    assert!(
+        !journal.exists(),
+        "the journal is removed once the file is written"
+    );
+    // Killed mid-run (the last line may be cut short).
+    let out = dir.join("killed.json");
+    let o = out.to_str().unwrap();
+    let args = [
+        "poses",
+        c,
+        "--drops",
+        RESUMED_DROPS,
+        "--out",
+        o,
+        "--threads",
+        "1",
+    ];
+    let journal = dir.join("killed.json.partial");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_impulse"))
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let waited = std::time::Instant::now();
+    while std::fs::read_to_string(&journal).map_or(0, |t| t.lines().count()) < 300 {
+        assert!(waited.elapsed().as_secs() < 60, "the journal never grew");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let kept = std::fs::read_to_string(&journal).unwrap().lines().count() as u64;
+    assert!(kept < 2001, "killed after the end");
+    let (ok, stdout, err) = impulse(&args);
+    assert!(ok, "{err}");
+    let resumed = count_after(&stdout, "resumed:", "resumed:").expect("a resumed line");
+    assert!(
+        resumed + 1 >= kept - 1 && resumed < 2000,
+        "{resumed} read back of {kept} lines"
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), reference);
+}
+
+/// A journal of another study (another seed here) is refused, naming it; nothing is run.
+#[test]
+fn a_journal_of_another_study_is_refused() {
+    let dir = common::Scratch::new("poses-journal");
+    let cube = part("cube.ron");
+    let out = dir.join("study.json");
+    let o = out.to_str().unwrap();
+    let c = cube.to_str().unwrap();
+    let (ok, _, err) = impulse(&[
+        "poses",
+        c,
+        "--drops",
+        "50",
+        "--out",
+        o,
+        "--max-wall",
+        "1e-9",
+    ]);
+    assert!(ok, "{err}");
+    assert!(dir.join("study.json.partial").exists());
+    let (ok, _, err) = impulse(&["poses", c, "--drops", "50", "--out", o, "--seed", "2"]);
+    assert!(!ok);
+    assert!(
+        err.contains("study.json.partial") && err.contains("another study"),
+        "{err}"
+    );
+}

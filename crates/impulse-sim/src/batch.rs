@@ -81,6 +81,32 @@ pub(crate) fn stream(seed: u64, index: u64) -> Xoshiro256PlusPlus {
     Xoshiro256PlusPlus::seed_from_u64(mix(seed) ^ mix(index.wrapping_add(GOLDEN_GAMMA)))
 }
 
+/// What a caller follows and steers of a shard's runs ([`run_shard_with`]): a study that is
+/// stopped (Ctrl-C, a wall-time limit) and run again does only the runs it had not done.
+pub struct RunHooks<'a, T> {
+    /// Called with the number of runs done (this call's) after each.
+    pub progress: &'a (dyn Fn(u64) + Sync),
+    /// Whether run `i` was done before (its outcome is kept elsewhere): it is not run.
+    pub skip: &'a (dyn Fn(u64) -> bool + Sync),
+    /// Whether to stop: once it says so, no further run starts (the runs under way finish).
+    pub stop: &'a (dyn Fn() -> bool + Sync),
+    /// Called with each run's index and outcome as it finishes (in no particular order): to
+    /// record it where a later call finds it.
+    pub record: &'a (dyn Fn(u64, &T) + Sync),
+}
+
+impl<T> RunHooks<'_, T> {
+    /// No skipping, no stopping, no recording.
+    pub fn none(progress: &(dyn Fn(u64) + Sync)) -> RunHooks<'_, T> {
+        RunHooks {
+            progress,
+            skip: &|_| false,
+            stop: &|| false,
+            record: &|_, _| {},
+        }
+    }
+}
+
 /// Runs `run(i)` for the runs `i` of `shard` of a study of `runs` runs on a pool of
 /// `threads` worker threads, calling `progress` with the number done after each. Returns
 /// the results in index order; an error names the run (`what` and its index).
@@ -96,22 +122,44 @@ pub(crate) fn run_shard<T: Send>(
     progress: &(dyn Fn(u64) + Sync),
     run: impl Fn(u64) -> Result<T, SimError> + Sync,
 ) -> Result<Vec<T>, SimError> {
+    let done = run_shard_with(what, runs, shard, threads, &RunHooks::none(progress), run)?;
+    Ok(done.into_iter().map(|(_, t)| t).collect())
+}
+
+/// [`run_shard`] steered by `hooks`: the runs it skips are not run, none starts once it is
+/// asked to stop; returns the runs done, (index, outcome) in index order.
+///
+/// # Errors
+/// As [`run_shard`].
+pub(crate) fn run_shard_with<T: Send>(
+    what: &str,
+    runs: u64,
+    shard: Shard,
+    threads: usize,
+    hooks: &RunHooks<'_, T>,
+    run: impl Fn(u64) -> Result<T, SimError> + Sync,
+) -> Result<Vec<(u64, T)>, SimError> {
     let pool = crate::threads::pool(threads, "study")?;
     let done = AtomicU64::new(0);
-    pool.install(|| {
+    let outcomes: Result<Vec<Option<(u64, T)>>, SimError> = pool.install(|| {
         (0..shard.runs_of(runs))
             .into_par_iter()
             .map(|j| shard.index + j * shard.count)
             .map(|i| {
+                if (hooks.skip)(i) || (hooks.stop)() {
+                    return Ok(None);
+                }
                 let out = run(i).map_err(|e| SimError::Runtime {
                     time: 0.0,
                     message: format!("{what} {i}: {e}"),
                 })?;
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-                Ok(out)
+                (hooks.record)(i, &out);
+                (hooks.progress)(done.fetch_add(1, Ordering::Relaxed) + 1);
+                Ok(Some((i, out)))
             })
             .collect()
-    })
+    });
+    Ok(outcomes?.into_iter().flatten().collect())
 }
 
 /// A study's file as [`merge`] sees it: a header that shard files of one study share, and

@@ -41,7 +41,7 @@ mod summary;
 pub use part::{PartFileDesc, PosePart};
 pub use study::{
     DropOutcome, DropSettings, Shard, StudyFile, THESIS_PILOT, drop_scene, merge, run_drops,
-    run_thesis_feedback,
+    run_drops_with, run_thesis_feedback,
 };
 pub use summary::{PoseRow, PoseSummary, summarize};
 

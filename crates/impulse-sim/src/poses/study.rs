@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::{EPSILON_REL, FACET_ANGLE, POLL_RATE, PosePart};
 use crate::SimError;
 pub use crate::batch::Shard;
-use crate::batch::{run_shard, stream};
+use crate::batch::{RunHooks, run_shard_with, stream};
 use crate::scene::{BodyDesc, ContactDesc, MotionDesc, RotationDesc, Scene, SceneDesc, ShapeDesc};
 use crate::world::{Material, World};
 
@@ -350,6 +350,35 @@ pub fn run_drops(
     threads: usize,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<DropOutcome>, SimError> {
+    let done = run_drops_with(
+        part,
+        settings,
+        seed,
+        drops,
+        shard,
+        threads,
+        &RunHooks::none(progress),
+    )?;
+    Ok(done.into_iter().map(|(_, d)| d).collect())
+}
+
+/// [`run_drops`] steered by `hooks` ([`RunHooks`]: drops done before are skipped, no drop
+/// starts once a stop is asked for, each outcome is recorded as it finishes); returns the
+/// drops done, (index, outcome) in index order. A drop's outcome depends only on (seed,
+/// index), so the drops of a stopped study and of the call that finishes it are those of one
+/// uninterrupted study.
+///
+/// # Errors
+/// As [`run_drops`].
+pub fn run_drops_with(
+    part: &PosePart,
+    settings: &DropSettings,
+    seed: u64,
+    drops: u64,
+    shard: Shard,
+    threads: usize,
+    hooks: &RunHooks<'_, DropOutcome>,
+) -> Result<Vec<(u64, DropOutcome)>, SimError> {
     settings.validate()?;
     // Drop 0's world, built once here to report a scene's errors before the workers start.
     World::from_scene(&Scene {
@@ -357,7 +386,7 @@ pub fn run_drops(
         base_dir: part.base_dir.clone(),
     })?;
     let stable = part.analysis.stable();
-    run_shard("drop", drops, shard, threads, progress, |i| {
+    run_shard_with("drop", drops, shard, threads, hooks, |i| {
         drop_once(
             part,
             settings,
