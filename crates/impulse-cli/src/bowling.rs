@@ -8,11 +8,11 @@ use std::time::Instant;
 
 use impulse_sim::batch::Shard;
 use impulse_sim::bowling::{
-    self, AlleyDesc, BIN_WIDTH, BowlingFile, HEAD_ON, Mean, POCKET, SHOULDERS, ThrowSettings,
+    self, AlleyDesc, BIN_WIDTH, BowlingFile, HEAD_ON, Mean, POCKET, SHOULDERS, ThrowOutcome,
+    ThrowSettings,
 };
 
 use crate::plot::{self, Axis};
-use crate::progress::Progress;
 
 /// Bins averaged together for the smoothed curves of the plot (5 bins of 5 mm: 2.5 cm).
 const SMOOTH_BINS: usize = 5;
@@ -63,8 +63,16 @@ pub struct BowlingArgs {
     #[arg(long, value_name = "K/N")]
     shard: Option<String>,
     /// Write every throw's outcome to this JSON file (the input of `merge` and `--from`).
+    /// While the study runs, each finished throw is kept in OUT.partial: a study stopped by
+    /// Ctrl-C, `--max-wall` or a kill and run again with the same arguments runs only the
+    /// throws it had not finished.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Stop cleanly after this many wall-clock seconds: no throw starts after it, the throws
+    /// done are summarised, and with `--out` kept in OUT.partial for the same command to
+    /// finish the study. Ctrl-C does the same (exit 130).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    max_wall: Option<f64>,
     /// Summarise the throws of this JSON file (a run's or a merge's `--out`) instead of
     /// throwing.
     #[arg(long, conflicts_with_all = [
@@ -141,36 +149,54 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
     }
     let shard = crate::study_io::shard_arg(args.shard.as_deref())?;
     let started = Instant::now();
+    let mut notes: Vec<String> = Vec::new();
     let (file, ran) = match &args.from {
         Some(path) => (read_file(path)?, false),
         None => {
             let threads = args
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            let mine = shard.runs_of(2 * args.throws);
-            let bar = Progress::count("impulse bowling", mine, "throws");
-            let progress = |done: u64| bar.set(done);
-            let outcomes = bowling::run_throws(
-                &alley,
-                &settings,
-                args.seed,
-                args.throws,
-                shard,
-                threads,
-                &progress,
-            )
-            .map_err(|e| e.to_string())?;
-            bar.finish();
-            let file = BowlingFile {
+            let mut file = BowlingFile {
                 alley,
                 settings,
                 seed: args.seed,
                 throws_per_kind: args.throws,
-                outcomes,
+                outcomes: Vec::new(),
             };
-            if let Some(out) = &args.out {
+            let study = crate::study_io::StudyRun {
+                command: "impulse bowling",
+                runs: "throws",
+                header: serde_json::to_value(&file).map_err(|e| e.to_string())?,
+                shard,
+                mine: shard.runs_of(2 * args.throws),
+                out: args.out.as_deref(),
+                max_wall: args.max_wall,
+            };
+            let done = crate::study_io::run_journaled(
+                &study,
+                |t: &ThrowOutcome| t.index,
+                |hooks| {
+                    bowling::run_throws_with(
+                        &file.alley,
+                        &settings,
+                        args.seed,
+                        args.throws,
+                        shard,
+                        threads,
+                        hooks,
+                    )
+                    .map_err(|e| e.to_string())
+                },
+            )?;
+            file.outcomes = done.outcomes;
+            if done.complete
+                && let (Some(out), Some(journal)) = (&args.out, done.journal)
+            {
                 crate::study_io::write_json(out, &file)?;
+                journal.remove()?;
             }
+            notes.extend(done.resumed);
+            notes.extend(done.stopped);
             (file, true)
         }
     };
@@ -208,7 +234,12 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
         )?;
         std::fs::write(path, plot).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     }
-    Ok(report(&file, shard, ran.then_some(wall)))
+    let mut text = report(&file, shard, ran.then_some(wall));
+    for note in &notes {
+        text.push('\n');
+        text.push_str(note);
+    }
+    Ok(text)
 }
 
 /// The running mean of a series over [`SMOOTH_BINS`] bins (skipping empty bins).

@@ -6,10 +6,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use impulse_sim::batch::RunHooks;
 use impulse_sim::poses::{self, DropOutcome, DropSettings, PosePart, Shard, StudyFile};
-
-use crate::progress::Progress;
 
 /// Options of `impulse poses`.
 #[derive(clap::Args)]
@@ -156,13 +153,6 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
             if args.drops == 0 {
                 return Err("--drops 0: a study needs at least one drop".into());
             }
-            if let Some(w) = args.max_wall
-                && !(w.is_finite() && w > 0.0)
-            {
-                return Err(format!(
-                    "--max-wall {w}: must be a positive number of seconds"
-                ));
-            }
             let threads = args
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -174,93 +164,33 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
                 stable: StudyFile::fingerprint(&part),
                 outcomes: Vec::new(),
             };
-            let journal = match &args.out {
-                Some(out) => {
-                    let header = serde_json::to_string(&serde_json::json!({
-                        "journal": "impulse poses",
-                        "shard": [shard.index, shard.count],
-                        "study": &file,
-                    }))
-                    .map_err(|e| e.to_string())?;
-                    let (journal, before) =
-                        crate::study_io::Journal::open::<DropOutcome>(out, &header)?;
-                    file.outcomes = before;
-                    Some(journal)
-                }
-                None => None,
+            let study = crate::study_io::StudyRun {
+                command: "impulse poses",
+                runs: "drops",
+                header: serde_json::to_value(&file).map_err(|e| e.to_string())?,
+                shard,
+                mine: shard.runs_of(args.drops),
+                out: args.out.as_deref(),
+                max_wall: args.max_wall,
             };
-            file.outcomes.sort_by_key(|d| d.index);
-            file.outcomes.dedup_by_key(|d| d.index);
-            let resumed = file.outcomes.len() as u64;
-            let mine = shard.runs_of(args.drops);
-            let bar = Progress::count("impulse poses", mine, "drops");
-            let progress = |done: u64| bar.set(resumed + done);
-            let before: Vec<u64> = file.outcomes.iter().map(|d| d.index).collect();
-            crate::interrupt::install();
-            let wall = Instant::now();
-            let stop = || {
-                crate::interrupt::requested()
-                    || args
-                        .max_wall
-                        .is_some_and(|w| wall.elapsed().as_secs_f64() >= w)
-            };
-            let record = |_: u64, d: &DropOutcome| {
-                if let Some(j) = &journal {
-                    j.record(d);
-                }
-            };
-            let hooks = RunHooks {
-                progress: &progress,
-                skip: &|i| before.binary_search(&i).is_ok(),
-                stop: &stop,
-                record: &record,
-            };
-            let now = poses::run_drops_with(
-                &part, &settings, args.seed, args.drops, shard, threads, &hooks,
-            )
-            .map_err(|e| e.to_string())?;
-            bar.finish();
-            if let Some(j) = &journal {
-                j.check()?;
+            let done = crate::study_io::run_journaled(
+                &study,
+                |d: &DropOutcome| d.index,
+                |hooks| {
+                    poses::run_drops_with(
+                        &part, &settings, args.seed, args.drops, shard, threads, hooks,
+                    )
+                    .map_err(|e| e.to_string())
+                },
+            )?;
+            file.outcomes = done.outcomes;
+            if done.complete
+                && let (Some(out), Some(journal)) = (&args.out, done.journal)
+            {
+                crate::study_io::write_json(out, &file)?;
+                journal.remove()?;
             }
-            file.outcomes.extend(now.into_iter().map(|(_, d)| d));
-            file.outcomes.sort_by_key(|d| d.index);
-            let done = file.outcomes.len() as u64;
-            if done == mine {
-                if let (Some(out), Some(j)) = (&args.out, journal) {
-                    crate::study_io::write_json(out, &file)?;
-                    j.remove()?;
-                }
-            } else {
-                let why = if crate::interrupt::requested() {
-                    "interrupted (Ctrl-C or SIGTERM)"
-                } else {
-                    "at the wall-time limit (--max-wall)"
-                };
-                let kept = match &args.out {
-                    Some(out) => format!(
-                        "they are kept in {}: the same command runs the other {} and writes {}",
-                        crate::study_io::Journal::path_for(out).display(),
-                        mine - done,
-                        out.display()
-                    ),
-                    None => "without --out they are not kept".to_owned(),
-                };
-                stopped = Some(format!(
-                    "stopped:          {why}, after {done} of {mine} drops; {kept}"
-                ));
-            }
-            if resumed > 0 {
-                resumed_note = Some(format!(
-                    "resumed:          {resumed} drops read back from {}, {} run now",
-                    args.out
-                        .as_deref()
-                        .map(crate::study_io::Journal::path_for)
-                        .unwrap_or_default()
-                        .display(),
-                    done - resumed
-                ));
-            }
+            (stopped, resumed_note) = (done.stopped, done.resumed);
             (file, true)
         }
     };

@@ -174,3 +174,47 @@ fn a_throws_scene_runs() {
         "{out}"
     );
 }
+
+/// A bowling study stopped at a wall-time limit and run again with the same arguments reads
+/// back the throws finished before, runs only the others, and writes the file of the same
+/// study never stopped, byte for byte.
+#[test]
+fn a_stopped_study_run_again_does_only_the_missing_throws() {
+    let dir = common::Scratch::new("bowling-resume");
+    let whole = dir.join("whole.json");
+    let run = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec!["bowling", "--throws", "6", "--out", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        common::impulse_text(&args)
+    };
+    let (ok, _, err) = run(&whole, &[]);
+    assert!(ok, "{err}");
+    let out = dir.join("stopped.json");
+    let (ok, stdout, err) = run(&out, &["--max-wall", "0.8", "--threads", "1"]);
+    assert!(ok, "{err}");
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("stopped:"))
+        .unwrap_or_else(|| panic!("no stopped line: {stdout}"));
+    let done: u64 = line
+        .split("after ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(done < 12, "{line}");
+    assert!(!out.exists());
+    let (ok, stdout, err) = run(&out, &[]);
+    assert!(ok, "{err}");
+    if done > 0 {
+        assert!(
+            stdout.contains(&format!("resumed:          {done} throws read back")),
+            "{stdout}"
+        );
+    }
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&whole).unwrap());
+    assert!(!dir.join("stopped.json.partial").exists());
+}

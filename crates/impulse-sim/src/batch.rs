@@ -114,6 +114,7 @@ impl<T> RunHooks<'_, T> {
 /// # Errors
 /// [`SimError::Invalid`] for zero threads or more than [`crate::threads::max_threads`]; the first
 /// failing run's error.
+#[cfg(test)]
 pub(crate) fn run_shard<T: Send>(
     what: &str,
     runs: u64,
@@ -126,11 +127,14 @@ pub(crate) fn run_shard<T: Send>(
     Ok(done.into_iter().map(|(_, t)| t).collect())
 }
 
-/// [`run_shard`] steered by `hooks`: the runs it skips are not run, none starts once it is
-/// asked to stop; returns the runs done, (index, outcome) in index order.
+/// Runs `run(i)` for the runs `i` of `shard` of a study of `runs` runs on a pool of
+/// `threads` worker threads, steered by `hooks`: the runs it skips are not run, none starts
+/// once it is asked to stop; returns the runs done, (index, outcome) in index order; an error
+/// names the run (`what` and its index).
 ///
 /// # Errors
-/// As [`run_shard`].
+/// [`SimError::Invalid`] for zero threads or more than [`crate::threads::max_threads`]; the first
+/// failing run's error.
 pub(crate) fn run_shard_with<T: Send>(
     what: &str,
     runs: u64,

@@ -41,7 +41,7 @@ pub use summary::{
 };
 pub use throw::{
     BowlingFile, MAX_THROWS_PER_KIND, ThrowKind, ThrowOutcome, ThrowSettings, ideal_crossing,
-    merge, pin_stands, run_throw, run_throws, throw_scene,
+    merge, pin_stands, run_throw, run_throws, run_throws_with, throw_scene,
 };
 
 /// Polls of a throw's world per simulated second (its scene's frame rate). Default `100`:

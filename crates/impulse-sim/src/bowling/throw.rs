@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::alley::{AlleyDesc, PIN_COUNT};
 use super::{POLL_RATE, STANDING_LIFT, STANDING_TILT};
 use crate::SimError;
-use crate::batch::{Shard, run_shard, stream};
+use crate::batch::{RunHooks, Shard, run_shard_with, stream};
 use crate::scene::{Scene, SceneDesc};
 use crate::world::World;
 
@@ -526,18 +526,40 @@ pub fn run_throws(
     threads: usize,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<ThrowOutcome>, SimError> {
+    let done = run_throws_with(
+        alley,
+        settings,
+        seed,
+        throws_per_kind,
+        shard,
+        threads,
+        &RunHooks::none(progress),
+    )?;
+    Ok(done.into_iter().map(|(_, t)| t).collect())
+}
+
+/// [`run_throws`] steered by `hooks` ([`RunHooks`]: throws done before are skipped, none
+/// starts once a stop is asked for, each outcome is recorded as it finishes); returns the
+/// throws done, (index, outcome) in index order. A throw depends only on (seed, index).
+///
+/// # Errors
+/// As [`run_throws`].
+pub fn run_throws_with(
+    alley: &AlleyDesc,
+    settings: &ThrowSettings,
+    seed: u64,
+    throws_per_kind: u64,
+    shard: Shard,
+    threads: usize,
+    hooks: &RunHooks<'_, ThrowOutcome>,
+) -> Result<Vec<(u64, ThrowOutcome)>, SimError> {
     let plan = Plan::new(alley, settings, seed, throws_per_kind)?;
     // The first throw's world, built here to report a scene's errors before the workers
     // start.
     World::from_scene(&Scene::new(plan.scene(0), "."))?;
-    run_shard(
-        "throw",
-        2 * throws_per_kind,
-        shard,
-        threads,
-        progress,
-        |i| plan.throw(i),
-    )
+    run_shard_with("throw", 2 * throws_per_kind, shard, threads, hooks, |i| {
+        plan.throw(i)
+    })
 }
 
 /// Merges shard files of one study into the file of the whole study.
