@@ -302,14 +302,8 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
     let changes: u64 = summary
         .transitions
         .iter()
-        .enumerate()
-        .map(|(a, row)| {
-            row.iter()
-                .enumerate()
-                .filter(|(b, _)| *b != a)
-                .map(|(_, c)| c)
-                .sum::<u64>()
-        })
+        .filter(|(a, b, _)| a != b)
+        .map(|(_, _, n)| n)
         .sum();
     if summary.drops > summary.uniform_drops {
         let _ = writeln!(

@@ -123,6 +123,16 @@ fn uniform_starts_cover_the_sphere_evenly() {
 /// that is never left keeps what reaches it.
 #[test]
 fn belt_fed_limit_is_the_stationary_distribution() {
+    // The counts as a dense matrix, handed over as the pairs with drops.
+    let belt_fed_limit = |dense: &[Vec<u64>], p: Vec<f64>| {
+        let sparse: Vec<(usize, usize, u64)> = dense
+            .iter()
+            .enumerate()
+            .flat_map(|(a, row)| row.iter().enumerate().map(move |(b, &n)| (a, b, n)))
+            .filter(|&(_, _, n)| n > 0)
+            .collect();
+        belt_fed_limit(dense.len(), &sparse, p)
+    };
     // a = 30/100, b = 10/50.
     let p = belt_fed_limit(&[vec![70, 30], vec![10, 40]], vec![1.0, 0.0]);
     let (a, b) = (0.3, 0.2);
@@ -142,6 +152,29 @@ fn belt_fed_limit_is_the_stationary_distribution() {
         (p[0]).abs() < 1e-10 && (p[1] - 0.8).abs() < 1e-10 && (p[2] - 0.2).abs() < 1e-10,
         "{p:?}"
     );
+}
+
+/// On a chain of 20 000 facets of which the drops touched three, the limit is that of the
+/// three alone (z absorbs all that x and y hold), every other facet keeps its share, and
+/// nothing of size m² is made (the dense chain took 3.2 GB per matrix here).
+#[test]
+fn belt_fed_limit_touches_only_the_facets_the_drops_touched() {
+    let m = 20_000;
+    let mut p = vec![0.5 / (m - 3) as f64; m];
+    let (x, y, z) = (17, 9_000, 19_999);
+    p[x] = 0.25;
+    p[y] = 0.25;
+    p[z] = 0.0;
+    // x → y with probability 0.3 and → z with 0.1, y → x with 0.2; z is never dropped from.
+    let counts = [(x, x, 60), (x, y, 30), (x, z, 10), (y, x, 10), (y, y, 40)];
+    let limit = belt_fed_limit(m, &counts, p.clone());
+    // z absorbs everything x and y hold: 0.5.
+    assert!((limit[z] - 0.5).abs() < 1e-9, "{}", limit[z]);
+    assert!(limit[x].abs() < 1e-9 && limit[y].abs() < 1e-9);
+    for f in [0, 5_000, 19_998] {
+        assert_eq!(limit[f], p[f]);
+    }
+    assert!((limit.iter().sum::<f64>() - 1.0).abs() < 1e-9);
 }
 
 /// Bad parts and settings give errors that say what is wrong, never a panic.
