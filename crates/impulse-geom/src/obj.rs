@@ -17,14 +17,33 @@ use glam::DVec3;
 use crate::error::GeomError;
 use crate::mesh::PolyMesh;
 
+/// Most faces [`parse`] reads before it refuses a mesh, checked as the faces are read (so a
+/// mesh far over it is refused in a moment, not after its hull is built). A convex part or a
+/// collision shape needs far fewer: every pose study and collision query costs more with
+/// each face, and a hull of 1.3 million faces took 29 s and 1.9 GB before its first drop.
+/// [`parse_with_limit`] reads larger meshes. Default `200 000`.
+pub const MAX_FACES: usize = 200_000;
+
 /// Parses OBJ text into a [`PolyMesh`]. `source_name` (a file name, or `"<string>"`) is used in
 /// error messages.
 ///
 /// # Errors
 /// [`GeomError::Obj`] with the line number for malformed statements, bad or out-of-range
-/// indices, or non-finite coordinates; the [`PolyMesh::new`] errors for faces that are too
-/// small or repeat a vertex (with the face number).
+/// indices, non-finite coordinates, or more than [`MAX_FACES`] faces; the [`PolyMesh::new`]
+/// errors for faces that are too small or repeat a vertex (with the face number).
 pub fn parse(text: &str, source_name: &str) -> Result<PolyMesh, GeomError> {
+    parse_with_limit(text, source_name, MAX_FACES)
+}
+
+/// [`parse`] with another limit on the number of faces than [`MAX_FACES`].
+///
+/// # Errors
+/// As [`parse`], with `max_faces` as the limit.
+pub fn parse_with_limit(
+    text: &str,
+    source_name: &str,
+    max_faces: usize,
+) -> Result<PolyMesh, GeomError> {
     let err = |line: usize, message: String| GeomError::Obj {
         source_name: source_name.to_owned(),
         line,
@@ -113,6 +132,16 @@ pub fn parse(text: &str, source_name: &str) -> Result<PolyMesh, GeomError> {
                         format!("face has {} vertices, needs 3", face.len()),
                     ));
                 }
+                if faces.len() == max_faces {
+                    return Err(err(
+                        line,
+                        format!(
+                            "more than {max_faces} faces, the limit of a mesh read for a body \
+                             (impulse_geom::obj::MAX_FACES): simplify the mesh (a convex part \
+                             needs far fewer), or read it with obj::parse_with_limit"
+                        ),
+                    ));
+                }
                 faces.push(face);
             }
             _ => {}
@@ -170,6 +199,38 @@ mod tests {
 
     const TETRA: &str = "# a tetrahedron\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n\
                          vn 0 0 1\nf 1 3 2\nf 1/1/1 2/2/1 4/3/1\nf 1//1 4//1 3//1\nf -3 -2 -1\n";
+
+    /// A mesh of more faces than the limit is refused at the first face over it, naming the
+    /// limit and the line; at the limit it reads. The default limit is [`MAX_FACES`]: a mesh
+    /// of one face more than it is refused by [`parse`].
+    #[test]
+    fn a_mesh_over_the_face_limit_is_refused_naming_it() {
+        let fan = |n: usize| {
+            let mut text = String::from("v 0 0 0\n");
+            for k in 0..=n {
+                let a = k as f64;
+                let _ = writeln!(text, "v {} {} 0", a.cos(), a.sin());
+            }
+            for k in 0..n {
+                let _ = writeln!(text, "f 1 {} {}", k + 2, k + 3);
+            }
+            text
+        };
+        let mesh = parse_with_limit(&fan(10), "fan.obj", 10).unwrap();
+        assert_eq!(mesh.face_count(), 10);
+        let e = parse_with_limit(&fan(11), "fan.obj", 10)
+            .unwrap_err()
+            .to_string();
+        // The 11th face is on line 1 + 12 + 11.
+        assert!(
+            e.contains("fan.obj:24") && e.contains("more than 10 faces"),
+            "{e}"
+        );
+        let e = parse(&fan(MAX_FACES + 1), "big.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&format!("more than {MAX_FACES} faces")), "{e}");
+    }
 
     #[test]
     fn parses_all_corner_forms_and_negative_indices() {
