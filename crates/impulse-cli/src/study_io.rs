@@ -65,7 +65,12 @@ impl Journal {
         let path = Self::path_for(out);
         let shown = path.display();
         let mut outcomes = Vec::new();
-        let file = if path.exists() {
+        // A journal whose header was cut short (killed as it was created) holds nothing.
+        let whole_header = path.exists()
+            && std::fs::read(&path)
+                .map_err(|e| format!("cannot read {shown}: {e}"))?
+                .contains(&b'\n');
+        let file = if whole_header {
             let text = std::fs::read(&path).map_err(|e| format!("cannot read {shown}: {e}"))?;
             let mut good = 0;
             let mut lines = text.split_inclusive(|&b| b == b'\n').peekable();

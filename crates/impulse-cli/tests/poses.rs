@@ -258,6 +258,26 @@ fn a_stopped_or_killed_study_run_again_does_only_the_missing_drops() {
     assert_eq!(std::fs::read(&out).unwrap(), reference);
 }
 
+/// A journal cut short in its header (killed as it was created) holds nothing: the study
+/// starts afresh and completes.
+#[test]
+fn a_journal_with_a_torn_header_starts_afresh() {
+    let dir = common::Scratch::new("poses-torn");
+    let cube = part("cube.ron");
+    let out = dir.join("study.json");
+    std::fs::write(dir.join("study.json.partial"), "{\"journal\": \"impul").unwrap();
+    let (ok, _, err) = impulse(&[
+        "poses",
+        cube.to_str().unwrap(),
+        "--drops",
+        "20",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.exists() && !dir.join("study.json.partial").exists());
+}
+
 /// A journal of another study (another seed here) is refused, naming it; nothing is run.
 #[test]
 fn a_journal_of_another_study_is_refused() {
