@@ -81,7 +81,8 @@ pub(crate) fn stream(seed: u64, index: u64) -> Xoshiro256PlusPlus {
     Xoshiro256PlusPlus::seed_from_u64(mix(seed) ^ mix(index.wrapping_add(GOLDEN_GAMMA)))
 }
 
-/// What a caller follows and steers of a shard's runs ([`run_shard_with`]): a study that is
+/// What a caller follows and steers of a shard's runs ([`crate::poses::run_drops_with`],
+/// [`crate::bowling::run_throws_with`]): a study that is
 /// stopped (Ctrl-C, a wall-time limit) and run again does only the runs it had not done.
 pub struct RunHooks<'a, T> {
     /// Called with the number of runs done (this call's) after each.
