@@ -189,11 +189,8 @@ pub fn run(args: &BowlingArgs) -> Result<String, String> {
                 },
             )?;
             file.outcomes = done.outcomes;
-            if done.complete
-                && let (Some(out), Some(journal)) = (&args.out, done.journal)
-            {
-                crate::study_io::write_json(out, &file)?;
-                journal.remove()?;
+            if let Some(journal) = done.journal.filter(|_| done.complete) {
+                journal.finish(&file)?;
             }
             notes.extend(done.resumed);
             notes.extend(done.stopped);

@@ -184,11 +184,8 @@ pub fn run(args: &PosesArgs) -> Result<String, String> {
                 },
             )?;
             file.outcomes = done.outcomes;
-            if done.complete
-                && let (Some(out), Some(journal)) = (&args.out, done.journal)
-            {
-                crate::study_io::write_json(out, &file)?;
-                journal.remove()?;
+            if let Some(journal) = done.journal.filter(|_| done.complete) {
+                journal.finish(&file)?;
             }
             (stopped, resumed_note) = (done.stopped, done.resumed);
             (file, true)

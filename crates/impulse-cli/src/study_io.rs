@@ -37,6 +37,8 @@ pub(crate) fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), Str
 /// with the same arguments, it reads them back and runs only the others. The journal is
 /// removed once the study's file is written.
 pub(crate) struct Journal {
+    /// The study's file, written when the study is whole ([`Journal::finish`]).
+    out: std::path::PathBuf,
     path: std::path::PathBuf,
     file: std::sync::Mutex<std::fs::File>,
     /// The first error of a write, reported by [`Journal::check`].
@@ -65,56 +67,59 @@ impl Journal {
         let path = Self::path_for(out);
         let shown = path.display();
         let mut outcomes = Vec::new();
+        let existing = match std::fs::read(&path) {
+            Ok(text) => Some(text),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(e) => return Err(format!("cannot read {shown}: {e}")),
+        };
         // A journal whose header was cut short (killed as it was created) holds nothing.
-        let whole_header = path.exists()
-            && std::fs::read(&path)
-                .map_err(|e| format!("cannot read {shown}: {e}"))?
-                .contains(&b'\n');
-        let file = if whole_header {
-            let text = std::fs::read(&path).map_err(|e| format!("cannot read {shown}: {e}"))?;
-            let mut good = 0;
-            let mut lines = text.split_inclusive(|&b| b == b'\n').peekable();
-            let first = lines.next().unwrap_or_default();
-            if first.strip_suffix(b"\n") != Some(header.as_bytes()) {
-                return Err(format!(
-                    "{shown} holds the runs of another study (another part, settings, seed, \
-                     run count or shard): remove it to start this one afresh, or give \
-                     another --out"
-                ));
-            }
-            good += first.len();
-            let mut n = 1;
-            while let Some(line) = lines.next() {
-                n += 1;
-                let whole = line.ends_with(b"\n");
-                match serde_json::from_slice::<T>(line) {
-                    Ok(t) if whole => {
-                        outcomes.push(t);
-                        good += line.len();
-                    }
-                    _ if lines.peek().is_none() => break,
-                    Err(e) => return Err(format!("{shown}: line {n} does not read: {e}")),
-                    Ok(_) => unreachable!("only the last line can lack its newline"),
+        let file = match existing.filter(|text| text.contains(&b'\n')) {
+            Some(text) => {
+                let mut lines = text.split_inclusive(|&b| b == b'\n').peekable();
+                let first = lines.next().unwrap_or_default();
+                if first.strip_suffix(b"\n") != Some(header.as_bytes()) {
+                    return Err(format!(
+                        "{shown} holds the runs of another study (another part, settings, seed, \
+                         run count or shard): remove it to start this one afresh, or give \
+                         another --out"
+                    ));
                 }
+                // The bytes up to the last whole outcome: a last line cut short by a kill
+                // (no newline, or not JSON) is dropped.
+                let mut good = first.len();
+                let mut n = 1;
+                while let Some(line) = lines.next() {
+                    n += 1;
+                    let last = lines.peek().is_none();
+                    match serde_json::from_slice::<T>(line) {
+                        Ok(t) if line.ends_with(b"\n") => {
+                            outcomes.push(t);
+                            good += line.len();
+                        }
+                        _ if last => break,
+                        Err(e) => return Err(format!("{shown}: line {n} does not read: {e}")),
+                        Ok(_) => return Err(format!("{shown}: line {n} does not end")),
+                    }
+                }
+                let mut file = std::fs::OpenOptions::new()
+                    .write(true)
+                    .open(&path)
+                    .map_err(|e| format!("cannot open {shown}: {e}"))?;
+                file.set_len(good as u64)
+                    .and_then(|()| std::io::Seek::seek(&mut file, std::io::SeekFrom::End(0)))
+                    .map_err(|e| format!("cannot trim {shown}: {e}"))?;
+                file
             }
-            let file = std::fs::OpenOptions::new()
-                .write(true)
-                .open(&path)
-                .map_err(|e| format!("cannot open {shown}: {e}"))?;
-            file.set_len(good as u64)
-                .map_err(|e| format!("cannot trim {shown}: {e}"))?;
-            let mut file = file;
-            std::io::Seek::seek(&mut file, std::io::SeekFrom::End(0))
-                .map_err(|e| format!("cannot open {shown}: {e}"))?;
-            file
-        } else {
-            let mut file =
-                std::fs::File::create(&path).map_err(|e| format!("cannot create {shown}: {e}"))?;
-            writeln!(file, "{header}").map_err(|e| format!("cannot write {shown}: {e}"))?;
-            file
+            None => {
+                let mut file = std::fs::File::create(&path)
+                    .map_err(|e| format!("cannot create {shown}: {e}"))?;
+                writeln!(file, "{header}").map_err(|e| format!("cannot write {shown}: {e}"))?;
+                file
+            }
         };
         Ok((
             Journal {
+                out: out.to_path_buf(),
                 path,
                 file: std::sync::Mutex::new(file),
                 error: std::sync::Mutex::new(None),
@@ -159,8 +164,9 @@ impl Journal {
         }
     }
 
-    /// Removes the journal (its study's file is written).
-    pub(crate) fn remove(self) -> Result<(), String> {
+    /// Writes the whole study's `file` to its `--out` path and removes the journal.
+    pub(crate) fn finish<F: Serialize>(self, file: &F) -> Result<(), String> {
+        write_json(&self.out, file)?;
         drop(self.file);
         std::fs::remove_file(&self.path)
             .map_err(|e| format!("cannot remove {}: {e}", self.path.display()))
@@ -177,7 +183,7 @@ pub(crate) struct Journaled<T> {
     pub(crate) resumed: Option<String>,
     /// What the report says of a stop before the end, if any.
     pub(crate) stopped: Option<String>,
-    /// The journal, to remove once the study's file is written.
+    /// The journal, to finish ([`Journal::finish`]) when the shard's runs are all done.
     pub(crate) journal: Option<Journal>,
 }
 

@@ -327,16 +327,10 @@ impl World {
             TurnSide::of(a, a.velocity, a.omega),
             TurnSide::of(b, b.velocity, b.omega),
         );
-        near_gaps(near)
-            .map(|(gap, direction)| {
-                let closing = clearance_closing(&sa, &sb, direction);
-                if closing > 0.0 {
-                    TURN_STEP_SAFETY * (gap - rest) / closing
-                } else {
-                    f64::INFINITY
-                }
-            })
-            .fold(s.step, f64::min)
+        clearance_bound(near, rest, TURN_STEP_SAFETY, |d| {
+            clearance_closing(&sa, &sb, d)
+        })
+        .min(s.step)
     }
 
     /// A pair held the fast way ([`Self::pair_contact`]: speculative and outside points, a
@@ -402,13 +396,15 @@ impl World {
     }
 }
 
+/// Whether a body moves on its own (not fixed, scripted or asleep): only its motion brings
+/// features of a held pair closer.
+fn moves(x: &crate::body::Body) -> bool {
+    x.takes_impulses() && !x.asleep
+}
+
 /// ‖ω‖ of a body, zero for a fixed or sleeping one.
 fn spin(x: &crate::body::Body) -> f64 {
-    if x.takes_impulses() && !x.asleep {
-        x.omega.length()
-    } else {
-        0.0
-    }
+    if moves(x) { x.omega.length() } else { 0.0 }
 }
 
 /// ‖ω‖²·r of a body, r its rotational reach (the centripetal acceleration of its farthest
@@ -417,7 +413,7 @@ fn spin(x: &crate::body::Body) -> f64 {
 /// but for a solid of revolution turning about its axis, and nothing for a smooth body,
 /// [`crate::body::Body::is_smooth`]); zero for a fixed or sleeping body.
 fn spin_power(x: &crate::body::Body, k: i32) -> f64 {
-    if !x.takes_impulses() || x.asleep {
+    if !moves(x) {
         0.0
     } else if k == 1 {
         if x.is_smooth() {
@@ -445,9 +441,7 @@ fn sphere_piece_accel(x: &crate::body::Body, piece: u32) -> f64 {
         x.shape.pieces().get(piece as usize),
         x.reach.get(piece as usize),
     ) {
-        (Some(p), Some(&r))
-            if x.takes_impulses() && !x.asleep && matches!(p.convex, Convex::Sphere(_)) =>
-        {
+        (Some(p), Some(&r)) if moves(x) && matches!(p.convex, Convex::Sphere(_)) => {
             x.omega.length_squared() * r
         }
         _ => 0.0,
@@ -529,7 +523,7 @@ impl TurnSide {
     ) -> Self {
         let side = Self::of(x, velocity, omega);
         match x.shape.pieces().get(piece as usize) {
-            Some(p) if x.takes_impulses() && !x.asleep && matches!(p.convex, Convex::Sphere(_)) => {
+            Some(p) if moves(x) && matches!(p.convex, Convex::Sphere(_)) => {
                 let arm = x.pose.rotation * p.pose.translation;
                 Self {
                     velocity: velocity + omega.cross(arm),
@@ -543,7 +537,7 @@ impl TurnSide {
 
     /// Body `x` moving at `velocity` and `omega` (its own, or a step's trial velocities).
     pub(super) fn of(x: &crate::body::Body, velocity: DVec3, omega: DVec3) -> Self {
-        let moving = x.takes_impulses() && !x.asleep;
+        let moving = moves(x);
         Self {
             velocity: if moving { velocity } else { DVec3::ZERO },
             spin_reach: if moving && !x.is_smooth() {
@@ -586,9 +580,32 @@ pub(super) fn clearance_closing(a: &TurnSide, b: &TurnSide, direction: Option<DV
     a.piece_reach + b.piece_reach + translation
 }
 
+/// The least `safety`·(gap − `rest`)/`closing` over the clearances of `near` whose
+/// `closing(direction)` is positive (∞ when none closes): with `closing` a speed, the time
+/// within which each keeps `safety` of its clearance above the rest gap
+/// ([`World::clearance_step`]); with a distance, the fraction of it that fits (`clearance_fit`
+/// in `island.rs`).
+pub(super) fn clearance_bound(
+    near: &Clearances,
+    rest: f64,
+    safety: f64,
+    closing: impl Fn(Option<DVec3>) -> f64,
+) -> f64 {
+    near_gaps(near)
+        .map(|(gap, direction)| {
+            let c = closing(direction);
+            if c > 0.0 {
+                safety * (gap - rest) / c
+            } else {
+                f64::INFINITY
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// Each clearance of `near` as (gap, direction from `a` toward `b`): the measured piece pairs
 /// (without a direction when their closest points coincide), then the bound on the others.
-pub(super) fn near_gaps(near: &Clearances) -> impl Iterator<Item = (f64, Option<DVec3>)> + '_ {
+fn near_gaps(near: &Clearances) -> impl Iterator<Item = (f64, Option<DVec3>)> + '_ {
     near.measured
         .iter()
         .map(|c| (c.gap, (c.direction != DVec3::ZERO).then_some(c.direction)))

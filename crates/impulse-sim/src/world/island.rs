@@ -19,7 +19,7 @@ use super::held::{DueTimes, HeldSet, Island};
 use super::held_links::SystemSource;
 use super::held_links::{predict_systems, write_members};
 use super::hold::PairContact;
-use super::hold::{TurnSide, approach_speed, clearance_closing, near_gaps};
+use super::hold::{TurnSide, approach_speed, clearance_bound, clearance_closing};
 use super::patch::{patch_plane_fit, patch_ranges, patch_targets};
 use crate::contact::response_body;
 use crate::error::SimError;
@@ -659,10 +659,19 @@ impl World {
         fast_pairs: &[(u32, u32)],
         rest: Option<f64>,
     ) -> Result<f64, SimError> {
-        let (_, ids) = self.island_ids(island);
-        let systems = self.island_systems(&ids)?;
+        let order = self.island_ids(island);
+        let systems = self.island_systems(&order.1)?;
         let mut counts = PlanCounts::default();
-        let plan = self.plan_island(island, h0, fast, fast_pairs, rest, systems, &mut counts);
+        let plan = self.plan_island(
+            island,
+            order,
+            h0,
+            fast,
+            fast_pairs,
+            rest,
+            systems,
+            &mut counts,
+        );
         counts.add_to(&mut self.counters);
         self.apply_island(plan?)
     }
@@ -686,13 +695,15 @@ impl World {
     }
 
     /// The read-only part of [`Self::step_island`]: the island's contacts solved over the
-    /// coming step (the step located, cut to fit), with `systems` its multibodies' jointed
-    /// systems ([`Self::island_systems`]); what it counted goes to `counts`. It reads only its
-    /// own island's bodies and pairs and the fixed bodies they touch.
+    /// coming step (the step located, cut to fit), with its bodies in the order `(index, ids)`
+    /// of [`Self::island_ids`] and `systems` its multibodies' jointed systems
+    /// ([`Self::island_systems`]); what it counted goes to `counts`. It reads only its own
+    /// island's bodies and pairs and the fixed bodies they touch.
     #[allow(clippy::too_many_arguments)]
     fn plan_island(
         &self,
         island: &Island,
+        (index, ids): (FxHashMap<u32, usize>, Vec<u32>),
         mut h0: f64,
         fast: bool,
         fast_pairs: &[(u32, u32)],
@@ -727,34 +738,24 @@ impl World {
         }
         let mut direct_outcome: Option<bool> = None;
         // Bodies: the island's dynamic bodies, then the fixed and scripted ones it touches.
-        let mut index: FxHashMap<u32, usize> = FxHashMap::default();
-        let mut ids: Vec<u32> = Vec::new();
-        let mut bodies: Vec<IslandBody> = Vec::new();
-        let mut add = |w: &World, i: u32, ids: &mut Vec<u32>, bodies: &mut Vec<IslandBody>| {
-            *index.entry(i).or_insert_with(|| {
-                let b = w.b(i);
-                ids.push(i);
-                bodies.push(IslandBody {
+        let mut bodies: Vec<IslandBody> = ids
+            .iter()
+            .map(|&i| {
+                let b = self.b(i);
+                IslandBody {
                     body: response_body(b),
                     com: b.pose.translation,
                     velocity: b.velocity,
                     omega: b.omega,
-                });
-                bodies.len() - 1
+                }
             })
-        };
-        for &i in &island.bodies {
-            add(self, i, &mut ids, &mut bodies);
-        }
+            .collect();
         let mut contacts: Vec<Contact> = Vec::new();
         let mut material: Vec<(bool, bool)> = Vec::new();
         let mut gaps: Vec<f64> = Vec::new();
         let mut origin: Vec<((u32, u32), usize, usize)> = Vec::new();
         for &p in &island.pairs {
-            let (ka, kb) = (
-                add(self, p.0, &mut ids, &mut bodies),
-                add(self, p.1, &mut ids, &mut bodies),
-            );
+            let (ka, kb) = (index[&p.0], index[&p.1]);
             let friction = self.material(p.0, p.1).friction;
             let (dyn_a, dyn_b) = (self.b(p.0).takes_impulses(), self.b(p.1).takes_impulses());
             let held = &self.islands.held[&p];
@@ -1239,18 +1240,17 @@ impl World {
             if near.measured.is_empty() && !near.unmeasured.is_finite() {
                 continue;
             }
-            let side = |v: &[IslandBody], i: u32| {
-                let k = index[&i];
-                TurnSide::of(self.b(i), v[k].velocity, v[k].omega)
+            let sides = |v: &[IslandBody]| {
+                let side = |i: u32| {
+                    let k = index[&i];
+                    TurnSide::of(self.b(i), v[k].velocity, v[k].omega)
+                };
+                (side(p.0), side(p.1))
             };
-            for (gap, direction) in near_gaps(near) {
-                let closing =
-                    |v: &[IslandBody]| clearance_closing(&side(v, p.0), &side(v, p.1), direction);
-                let travel = 0.5 * (closing(v.0) + closing(v.1)) * h;
-                if travel > 0.0 {
-                    fit = fit.min((gap - rest) / travel);
-                }
-            }
+            let ((a0, b0), (a1, b1)) = (sides(v.0), sides(v.1));
+            fit = fit.min(clearance_bound(near, rest, 1.0, |d| {
+                0.5 * (clearance_closing(&a0, &b0, d) + clearance_closing(&a1, &b1, d)) * h
+            }));
         }
         fit
     }
