@@ -63,6 +63,11 @@ pub struct ReduceArgs {
     /// and the report says where it stopped (`"stopped"`). Ctrl-C does the same (exit 130).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     max_wall: Option<f64>,
+    /// Most joint degrees of freedom (and links) the mechanism may have: a larger one is
+    /// refused before any work (the reduction's matrices grow as dof², its factorisations as
+    /// dof³).
+    #[arg(long, value_name = "N", default_value_t = impulse_reduced::MAX_DOF)]
+    max_dof: usize,
     /// Simulated end time (s), > 0.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     until: f64,
@@ -189,7 +194,7 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
     let desc =
         MechanismDesc::from_ron(&text).map_err(|e| format!("{}: {e}", args.mechanism.display()))?;
     let m = desc
-        .build()
+        .build_with_max_dof(args.max_dof)
         .map_err(|e| format!("{}: {e}", args.mechanism.display()))?;
     let loads = parse_loads(&m, &args.load)?;
     if let Some(path) = &args.html {

@@ -97,6 +97,63 @@ fn bad_input_names_the_problem() {
     );
 }
 
+/// A mechanism past the size limit is refused before any work, naming its size, the limit
+/// and how to raise it; `--max-dof` moves the limit (the lever's one hinge: 1 dof).
+#[test]
+fn a_mechanism_over_the_size_limit_names_the_limit() {
+    let n = impulse_reduced::MAX_DOF / 3 + 1;
+    let mut text = String::from("Mechanism(links: [Link(name: \"l0\")");
+    for i in 1..=n {
+        text += &format!(
+            ", Link(name: \"l{i}\", position: (0.0, 0.0, {i}.0), mass: 1.0, inertia: (0.1, 0.1, 0.1))"
+        );
+    }
+    text += "], joints: [";
+    for i in 1..=n {
+        text += &format!(
+            "Joint(name: \"j{i}\", parent: \"l{}\", child: \"l{i}\", anchor: (0.0, 0.0, {}.0), kind: Ball, compliance: [0.001]),",
+            i - 1,
+            i - 1
+        );
+    }
+    text += &format!("], end_effectors: [\"l{n}\"])");
+    let dir = common::Scratch::new("reduce-large");
+    let big = dir.join("big.ron");
+    std::fs::write(&big, text).unwrap();
+    let out = impulse(&["reduce", big.to_str().unwrap()]);
+    let want = format!(
+        "{} links and {} joint degrees of freedom, over the limit of {}",
+        n + 1,
+        3 * n,
+        impulse_reduced::MAX_DOF
+    );
+    assert!(
+        !out.ok && out.stderr.contains(&want) && out.stderr.contains("--max-dof"),
+        "{}",
+        out.stderr
+    );
+    let out = impulse(&[
+        "reduce",
+        &mechanism("lever.ron"),
+        "--static",
+        "--max-dof",
+        "0",
+    ]);
+    assert!(
+        !out.ok && out.stderr.contains("over the limit of 0"),
+        "{}",
+        out.stderr
+    );
+    let out = impulse(&[
+        "reduce",
+        &mechanism("lever.ron"),
+        "--static",
+        "--max-dof",
+        "1",
+    ]);
+    assert!(out.ok, "{}", out.stderr);
+}
+
 /// `--html` replays the reduced simulation: the page lists the links in the order of `--out`,
 /// then the base (free: it moves) and the ground slab (fixed), and holds the frames of
 /// `--out`; `--static` has nothing to replay and is refused.

@@ -165,6 +165,22 @@ pub enum Error {
     /// An argument of a call is malformed (wrong length, unknown name, NaN).
     #[error("{0}")]
     Argument(String),
+    /// The mechanism is larger than the limit a build was given
+    /// ([`crate::desc::MAX_DOF`] by default), checked before any work.
+    #[error(
+        "the mechanism has {links} links and {dof} joint degrees of freedom, over the limit of \
+         {limit}: its reduction builds dense matrices of dof² entries and factorises them in \
+         time growing as dof³; raise the limit with `impulse reduce --max-dof N` or \
+         `MechanismDesc::build_with_max_dof`"
+    )]
+    TooLarge {
+        /// Links declared.
+        links: usize,
+        /// Joint degrees of freedom declared (saturating sum).
+        dof: usize,
+        /// The limit the build was given.
+        limit: usize,
+    },
 }
 
 /// `[1.234e-3, …]`-style list of the numbers (three decimals of mantissa).

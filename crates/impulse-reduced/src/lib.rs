@@ -60,7 +60,7 @@ pub mod walk;
 pub mod wrench;
 
 pub use construct::{ConstructOptions, MassModel, ReducedModel};
-pub use desc::{BaseDesc, JointDesc, JointKindDesc, LinkDesc, MechanismDesc, ShapeDesc};
+pub use desc::{BaseDesc, JointDesc, JointKindDesc, LinkDesc, MAX_DOF, MechanismDesc, ShapeDesc};
 pub use dynamics::{
     BaseState, ContactParams, MAX_THREADS_PER_CORE, ReducedSim, StepReport, max_threads,
 };

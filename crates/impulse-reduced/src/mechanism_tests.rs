@@ -188,3 +188,43 @@ fn cycle_names_a_joint_on_the_cycle() {
     let Error::Cycle(j) = e else { panic!("{e}") };
     assert!(j == "back" || j == "jac", "{j}");
 }
+
+/// The size limit counts the joints' degrees of freedom as declared (the valid mechanism has
+/// 3 + 1 + 6 + 1 + 1 = 12, counted by hand from its joint kinds) and is checked before any
+/// other validation: a mechanism over it is refused even when it is also malformed.
+#[test]
+fn a_mechanism_over_the_dof_limit_is_refused_before_any_work() {
+    let d = valid();
+    assert!(d.build_with_max_dof(12).is_ok());
+    let e = d.build_with_max_dof(11).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::TooLarge {
+                links: 5,
+                dof: 12,
+                limit: 11
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("--max-dof"), "{e}");
+    // Links count too: many links and no joints (which would fail later for want of joints)
+    // stop at the limit.
+    let mut many = MechanismDesc::new("many");
+    for i in 0..crate::desc::MAX_DOF + 2 {
+        many.link(LinkDesc::new(&format!("l{i}"), [0.0; 3]));
+    }
+    assert!(matches!(
+        many.build().unwrap_err(),
+        Error::TooLarge { links, dof: 0, .. } if links == crate::desc::MAX_DOF + 2
+    ));
+    // The paper's largest mechanism (helix-400, 400 ball joints) is within the default.
+    let helix = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/mechanisms/helix-400.ron"
+    ))
+    .unwrap();
+    let m = MechanismDesc::from_ron(&helix).unwrap().build().unwrap();
+    assert_eq!(m.ndof, 3 * 400);
+}
