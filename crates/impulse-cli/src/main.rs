@@ -21,6 +21,7 @@
 
 mod bowling;
 mod dynamics;
+mod events;
 mod glb;
 mod html;
 mod interrupt;
@@ -66,6 +67,11 @@ enum Command {
         /// memory does not grow with the run's length.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Write every impact (collisions and microcollisions: time, the two bodies or links,
+        /// kind, impulse, point, normal, the normal speed before and after, the energies) to
+        /// this .csv or .json file, as the run goes (FILE.partial until the run ends).
+        #[arg(long, value_name = "FILE")]
+        events: Option<PathBuf>,
         /// Write SVG plots (energy.svg, paths.svg) into this directory.
         #[arg(long)]
         plot: Option<PathBuf>,
@@ -208,6 +214,7 @@ fn main() -> ExitCode {
             scene,
             until,
             out,
+            events,
             plot,
             gltf,
             html,
@@ -219,6 +226,7 @@ fn main() -> ExitCode {
             scene,
             until: *until,
             out: out.as_deref(),
+            events: events.as_deref(),
             plot: plot.as_deref(),
             gltf: gltf.as_deref(),
             html: html.as_deref(),

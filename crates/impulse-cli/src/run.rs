@@ -17,6 +17,8 @@ pub struct RunArgs<'a> {
     pub until: Option<f64>,
     /// Trajectory output (.csv or .json).
     pub out: Option<&'a Path>,
+    /// Impact events output (.csv or .json).
+    pub events: Option<&'a Path>,
     /// Directory for SVG plots.
     pub plot: Option<&'a Path>,
     /// Animated glTF binary output (.glb).
@@ -77,6 +79,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         format_of(out)?;
         directory_exists("--out", out)?;
     }
+    if let Some(path) = args.events {
+        crate::events::EventSink::check(path)?;
+    }
     if let Some(path) = args.gltf {
         crate::glb::check_path(path)?;
         directory_exists("--gltf", path)?;
@@ -116,6 +121,10 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         Some(out) => Some(Sink::create(out, &world)?),
         None => None,
     };
+    let mut events = match args.events {
+        Some(path) => Some(crate::events::EventSink::create(path, &world)?),
+        None => None,
+    };
     let rec = impulse_sim::run_streaming(
         &mut world,
         until,
@@ -131,6 +140,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
             if let Some(s) = sink.as_mut() {
                 s.frame(f)?;
             }
+            if let Some(e) = events.as_mut() {
+                e.frame(f)?;
+            }
             Ok(!crate::interrupt::requested()
                 && args
                     .max_wall
@@ -144,12 +156,18 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
             if let Some(s) = sink {
                 s.abandon();
             }
+            if let Some(s) = events {
+                s.abandon();
+            }
             return Err(e.to_string());
         }
     };
     progress.finish();
     if let Some(s) = sink {
         s.finish(rec.max_penetration())?;
+    }
+    if let Some(s) = events {
+        s.finish()?;
     }
     if let Some(path) = args.gltf {
         crate::glb::write(path, &rec, &world)?;

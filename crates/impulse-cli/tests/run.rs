@@ -575,3 +575,92 @@ fn last_whole_frame(csv: &Path) -> f64 {
         .map(|t| t.parse::<f64>().unwrap())
         .fold(0.0, f64::max)
 }
+
+/// `--events` lists the two-ball scene's one impact: its impulse is the closed form of a
+/// central frictionless collision, J = (1 + e)·m₁m₂/(m₁ + m₂)·|u| along the line of centres,
+/// its normal speed after is −e times the speed before, and the two energies differ by
+/// (1 − e²)·½·m₁m₂/(m₁ + m₂)·u² — e, the speeds and the masses read from the scene file.
+/// The JSON form holds the same numbers.
+#[test]
+fn events_list_the_impact_with_its_closed_form_impulse() {
+    /// The collision is resolved by integrating through it (thesis §3.3) to the response's
+    /// relative tolerance: measured 3e-16 relative here.
+    const IMPULSE_REL: f64 = 1e-9;
+    let dir = temp_dir("events");
+    let scene_path = scenes().join("two-ball-collision.ron");
+    let scene = impulse_sim::Scene::read(&scene_path).unwrap();
+    let e = scene.desc.default_contact.restitution;
+    let world = impulse_sim::World::from_scene(&scene).unwrap();
+    let bodies: Vec<(String, f64, f64)> = world
+        .bodies()
+        .map(|(_, b)| (b.name.clone(), b.mass.unwrap().mass, b.velocity.x))
+        .collect();
+    let (m1, m2) = (bodies[0].1, bodies[1].1);
+    let reduced = m1 * m2 / (m1 + m2);
+    let u = bodies[0].2 - bodies[1].2;
+    let csv = dir.join("events.csv");
+    let json = dir.join("events.json");
+    for out in [&csv, &json] {
+        let (ok, _, stderr) = impulse(&[
+            "run",
+            scene_path.to_str().unwrap(),
+            "--events",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{stderr}");
+    }
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 1, "{text}");
+    let col = |name: &str| {
+        let k = header.iter().position(|h| *h == name).unwrap();
+        rows[0][k]
+    };
+    let num = |name: &str| col(name).parse::<f64>().unwrap();
+    assert_eq!(col("kind"), "collision");
+    assert_eq!((col("body_a"), col("body_b")), ("striker", "target"));
+    let j = (1.0 + e) * reduced * u;
+    assert!(
+        (num("impulse_x").abs() - j).abs() <= IMPULSE_REL * j,
+        "{} vs {j}",
+        num("impulse_x")
+    );
+    assert_eq!((num("impulse_y"), num("impulse_z")), (0.0, 0.0));
+    let (before, after) = (num("normal_speed_before"), num("normal_speed_after"));
+    assert!((before.abs() - u).abs() <= IMPULSE_REL * u, "{before}");
+    assert!((after + e * before).abs() <= IMPULSE_REL * u, "{after}");
+    let lost = num("energy_before") - num("energy_after");
+    let want = (1.0 - e * e) * 0.5 * reduced * u * u;
+    assert!(
+        (lost - want).abs() <= IMPULSE_REL * want,
+        "{lost} vs {want}"
+    );
+    // The JSON file: the same event, the same numbers to the bit.
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let events = v.as_array().unwrap();
+    assert_eq!(events.len(), 1);
+    assert_eq!(events[0]["impulse"][0].as_f64().unwrap(), num("impulse_x"));
+    assert_eq!(events[0]["normal_speed_after"].as_f64().unwrap(), after);
+    assert_eq!(events[0]["kind"], "collision");
+}
+
+/// `--events` refuses a name it cannot write before the run.
+#[test]
+fn events_with_a_bad_name_are_refused_before_the_run() {
+    let scene = scenes().join("two-ball-collision.ron");
+    let (ok, _, stderr) = impulse(&["run", scene.to_str().unwrap(), "--events", "e.txt"]);
+    assert!(!ok && stderr.contains("--events e.txt: the file name must end in .csv or .json"));
+    let (ok, _, stderr) = impulse(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--events",
+        "/no/such/dir/e.csv",
+    ]);
+    assert!(
+        !ok && stderr.contains("the directory /no/such/dir does not exist"),
+        "{stderr}"
+    );
+}

@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 use crate::monitor::{PenetrationMonitor, PenetrationReport};
-use crate::world::{BodyHandle, BodyState, Counters, World};
+use crate::world::{BodyHandle, BodyState, ContactEvent, Counters, World};
 
 /// The state of the world at one instant.
 #[derive(Clone, Debug, PartialEq)]
@@ -19,6 +19,9 @@ pub struct Frame {
     pub potential_energy: f64,
     /// Event counters so far.
     pub counters: Counters,
+    /// The contacts resolved since the frame before ([`World::contacts`]: collisions and
+    /// microcollisions, each with its impulse and normal speeds), in the order resolved.
+    pub contacts: Vec<ContactEvent>,
 }
 
 impl Frame {
@@ -31,6 +34,7 @@ impl Frame {
             kinetic_energy: world.kinetic_energy(),
             potential_energy: world.potential_energy(),
             counters: world.counters(),
+            contacts: world.contacts().to_vec(),
         }
     }
 }
@@ -410,8 +414,10 @@ fn state_numbers(b: &BodyState) -> [f64; 16] {
     ]
 }
 
-/// A CSV field: quoted (quotes doubled) when it holds a comma, quote or line break.
-fn csv_field(s: &str) -> String {
+/// A CSV field: quoted (quotes doubled) when it holds a comma, quote or line break (RFC 4180),
+/// as the trajectory CSV writes body names.
+#[must_use]
+pub fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {

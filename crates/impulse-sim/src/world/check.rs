@@ -781,6 +781,7 @@ impl World {
         let before = (
             bi.kinetic_energy() + bj.kinetic_energy(),
             bi.linear_momentum() + bj.linear_momentum(),
+            (bi.point_velocity(x) - bj.point_velocity(x)).dot(n),
         );
         let outcome = if forced {
             Err("fault injected by a test".to_string())
@@ -844,7 +845,8 @@ impl World {
 
     /// Counts a contact of `(i, j)` just resolved with `impulse` (on `i`, world) at `x` along
     /// `n`, and logs its event; `before` is the two sides' kinetic energy and linear momentum
-    /// before the impulse (a link's side is its whole multibody).
+    /// before the impulse (a link's side is its whole multibody) and the normal relative
+    /// velocity at `x` then.
     pub(super) fn record_contact(
         &mut self,
         (i, j): (u32, u32),
@@ -852,7 +854,7 @@ impl World {
         impulse: DVec3,
         x: DVec3,
         n: DVec3,
-        before: (f64, DVec3),
+        before: (f64, DVec3, f64),
     ) {
         match kind {
             ContactKind::Collision => self.counters.collisions += 1,
@@ -864,6 +866,7 @@ impl World {
             ContactKind::Fallback => {}
         }
         let after = self.pair_energy(i, j);
+        let normal_speed_after = self.normal_speed((i, j), x, n);
         let event = ContactEvent {
             time: self.time,
             a: self.handle_of(i),
@@ -876,11 +879,19 @@ impl World {
             energy_after: after.0,
             momentum_before: before.1,
             momentum_after: after.1,
+            normal_speed_before: before.2,
+            normal_speed_after,
         };
         if let Some(log) = &mut self.events {
             log.push(event);
         }
         self.recent.push(event);
+    }
+
+    /// The normal relative velocity (v_i(x) − v_j(x))·n of pair `(i, j)` at `x` now (a link's
+    /// velocity is its multibody's, written to its body at every change).
+    pub(super) fn normal_speed(&self, (i, j): (u32, u32), x: DVec3, n: DVec3) -> f64 {
+        (self.b(i).point_velocity(x) - self.b(j).point_velocity(x)).dot(n)
     }
 
     /// A pair checked [`super::MAX_CHECKS_WITHOUT_PROGRESS`] times without time advancing:

@@ -161,7 +161,8 @@ impl World {
                 ..Settings::default()
             },
         };
-        let before = self.pair_energy(i, j);
+        let (energy, momentum) = self.pair_energy(i, j);
+        let before = (energy, momentum, u.dot(n));
         let one_tree = match (self.b(i).link, self.b(j).link) {
             (Some((ma, la)), Some((mb, lb))) if ma == mb => Some((ma as usize, (la, lb))),
             _ => None,

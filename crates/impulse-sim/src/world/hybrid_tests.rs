@@ -714,3 +714,81 @@ fn a_rover_standing_on_the_floor_stays_at_rest() {
         "redone steps while standing"
     );
 }
+
+/// A hanging pendulum swung into a free ball at rest (no gravity, μ = 0, e = 0): the contact
+/// event of the link carries the impulse of the closed form j = −u_n / (nᵀ(J_p M⁻¹ J_pᵀ +
+/// 1/m_b)n), where for one hinge J_p = ŷ × (x − pivot) and M = I_pivot = I_c + m·d² (the
+/// parallel-axis theorem on the rod's own inertia), u_n read from the state before the
+/// impact; the ball's velocity change read from the states is j·n/m_b; its normal speed
+/// after is 0 (plastic), and the event's normal speeds agree with those read from the states.
+#[test]
+fn a_link_striking_a_ball_logs_the_closed_form_impulse() {
+    /// The response integrates through the impact (thesis §3.3) to a relative tolerance of
+    /// about 1e-12 of the impulse; the rest is rounding.
+    const REL: f64 = 1e-9;
+    let mut settings = WorldSettings::new(EPS);
+    settings.gravity = DVec3::ZERO;
+    let mut w = World::new(settings).unwrap();
+    let pivot = DVec3::new(0.0, 0.0, 1.0);
+    let qd = 2.0;
+    let (sim, shapes) = pendulum(pivot, 0.0, qd);
+    w.add_multibody("pendulum", sim, shapes).unwrap();
+    w.set_material_pair(
+        "steel",
+        "ball",
+        crate::Material {
+            friction: 0.0,
+            restitution: 0.0,
+        },
+    )
+    .unwrap();
+    // The rod swings toward −x (rotation about +y); the ball waits 5 mm off its face, 0.4 m
+    // below the pivot.
+    let (radius, density) = (0.05, 1000.0);
+    let ball = w
+        .add_body(
+            &BodyDesc::new("ball", ShapeDesc::sphere(radius))
+                .at([-(0.02 + radius + 0.005), 0.0, 0.6])
+                .with_density(density)
+                .with_material("ball"),
+        )
+        .unwrap();
+    let m_b = density * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
+    let (m, d) = (1.0, 0.25); // the rod of `pendulum`: 1 kg, centre 0.25 m below the pivot
+    let i_pivot = m / 3.0 * (0.02f64.powi(2) + 0.25f64.powi(2)) + m * d * d;
+    // Nothing acts before the impact: the rod turns at `qd`, the ball rests.
+    w.set_event_log(true);
+    while w.events().is_empty() {
+        w.step_until(w.time() + 1e-3).unwrap();
+        assert!(w.time() < 0.1, "no impact");
+    }
+    let e = w.events()[0];
+    let after_ball = w.state(ball).unwrap();
+    // Which side is the ball: the impulse acts on `a`.
+    let sign = if e.a == ball { 1.0 } else { -1.0 };
+    let n = sign * e.normal; // toward the ball
+    let x = e.point;
+    let jp = DVec3::Y.cross(x - pivot); // point velocity per unit rate
+    let u_n = (-jp * qd).dot(n); // ball (at rest) relative to the rod, along n
+    assert!(u_n < 0.0, "approaching: {u_n}");
+    let k = jp.dot(n).powi(2) / i_pivot + 1.0 / m_b;
+    let j = -u_n / k;
+    let p = sign * e.impulse; // on the ball
+    assert!(
+        (p.dot(n) - j).abs() <= REL * j,
+        "impulse {} vs {j}",
+        p.dot(n)
+    );
+    assert!(p.reject_from(n).length() <= REL * j, "friction {p:?}");
+    let dv = after_ball.velocity;
+    assert!(
+        (dv - p / m_b).length() <= REL * j / m_b,
+        "{dv:?} vs {:?}",
+        p / m_b
+    );
+    assert!(
+        (e.normal_speed_before - u_n).abs() <= REL * u_n.abs(),
+        "{e:?}"
+    );
+    assert!(e.normal_speed_after.abs() <= REL * u_n.abs(), "{e:?}");
+}

@@ -251,6 +251,13 @@ pub struct ContactEvent {
     pub momentum_before: DVec3,
     /// Linear momentum of the two bodies after the impulse.
     pub momentum_after: DVec3,
+    /// The normal relative velocity at the contact point before the impulse,
+    /// (v_a(x) − v_b(x))·n: negative while the bodies approach (eq. 3.3).
+    pub normal_speed_before: f64,
+    /// The normal relative velocity after the impulse: −e times the speed before for a
+    /// frictionless collision of restitution e (thesis §3.4, the work-based restitution of
+    /// eq. 3.16 in general).
+    pub normal_speed_after: f64,
 }
 
 /// A contact the response could not resolve, and what was done instead.
