@@ -12,7 +12,12 @@
 //! frame.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+use crate::partial::{PartialFile, is_json};
+
+/// The option's name in messages.
+const FLAG: &str = "--events";
 
 use impulse_sim::contact::ContactKind;
 use impulse_sim::{ContactEvent, Frame, SimError, World};
@@ -24,14 +29,12 @@ energy_before,energy_after";
 
 /// The `--events` file being written.
 pub struct EventSink {
-    file: std::io::BufWriter<std::fs::File>,
+    file: PartialFile,
     json: bool,
     /// Events written so far (a JSON object after the first is preceded by a comma).
     written: u64,
     /// Body names by slot index ([`impulse_sim::BodyHandle::index`]).
     names: Vec<String>,
-    partial: PathBuf,
-    out: PathBuf,
 }
 
 /// The name `--events` uses for a contact kind.
@@ -48,18 +51,14 @@ impl EventSink {
     /// Refuses a file name that ends in neither .csv nor .json, or whose directory does not
     /// exist: checked before the run.
     pub fn check(out: &Path) -> Result<(), String> {
-        json_of(out)?;
-        crate::run::directory_exists("--events", out)
+        is_json(FLAG, out)?;
+        crate::run::directory_exists(FLAG, out)
     }
 
     /// Opens `out`'s temporary file for the bodies of `world`.
     pub fn create(out: &Path, world: &World) -> Result<Self, String> {
-        let json = json_of(out)?;
-        let mut name = out.file_name().unwrap_or_default().to_os_string();
-        name.push(".partial");
-        let partial = out.with_file_name(name);
-        let file = std::fs::File::create(&partial)
-            .map_err(|e| format!("--events: cannot write {}: {e}", partial.display()))?;
+        let json = is_json(FLAG, out)?;
+        let mut file = PartialFile::create(FLAG, out)?;
         let mut names = Vec::new();
         for (h, b) in world.bodies() {
             let i = h.index() as usize;
@@ -68,23 +67,20 @@ impl EventSink {
             }
             names[i] = b.name.clone();
         }
-        let mut sink = Self {
-            file: std::io::BufWriter::new(file),
-            json,
-            written: 0,
-            names,
-            partial,
-            out: out.to_path_buf(),
-        };
         let head = if json {
             "[".to_owned()
         } else {
             format!("{CSV_HEADER}\n")
         };
-        sink.file
+        file.writer()
             .write_all(head.as_bytes())
-            .map_err(|e| format!("--events: cannot write {}: {e}", sink.partial.display()))?;
-        Ok(sink)
+            .map_err(|e| format!("{FLAG}: cannot write {}: {e}", file.partial().display()))?;
+        Ok(Self {
+            file,
+            json,
+            written: 0,
+            names,
+        })
     }
 
     /// Writes the contacts of `frame` (those resolved since the frame before).
@@ -92,7 +88,7 @@ impl EventSink {
         for e in &frame.contacts {
             self.event(e).map_err(|err| SimError::Runtime {
                 time: frame.time,
-                message: format!("cannot write {}: {err}", self.partial.display()),
+                message: format!("cannot write {}: {err}", self.file.partial().display()),
             })?;
         }
         Ok(())
@@ -156,7 +152,7 @@ impl EventSink {
                 .collect();
             let sep = if self.written == 0 { "\n" } else { ",\n" };
             write!(
-                self.file,
+                self.file.writer(),
                 "{sep}  {{\"time\": {:?}, \"kind\": \"{}\", \"body_a\": {}, \"body_b\": {}, {}}}",
                 e.time,
                 kind_name(e.kind),
@@ -167,7 +163,7 @@ impl EventSink {
         } else {
             let cells: Vec<String> = numbers.iter().map(|x| format!("{x:?}")).collect();
             writeln!(
-                self.file,
+                self.file.writer(),
                 "{:?},{},{},{},{}",
                 e.time,
                 impulse_sim::record::csv_field(kind_name(e.kind)),
@@ -180,34 +176,20 @@ impl EventSink {
         Ok(())
     }
 
-    /// Ends the file and gives it its name; returns the number of events written.
-    pub fn finish(mut self) -> Result<u64, String> {
-        let cannot = |e: std::io::Error| format!("cannot write {}: {e}", self.out.display());
+    /// Ends the file and gives it its name.
+    pub fn finish(mut self) -> Result<(), String> {
         if self.json {
-            self.file.write_all(b"\n]\n").map_err(cannot)?;
+            let partial = self.file.partial().display().to_string();
+            self.file
+                .writer()
+                .write_all(b"\n]\n")
+                .map_err(|e| format!("cannot write {partial}: {e}"))?;
         }
-        let written = self.written;
-        let (partial, out) = (self.partial.clone(), self.out.clone());
-        let file = self.file.into_inner().map_err(|e| cannot(e.into_error()))?;
-        file.sync_all().map_err(cannot)?;
-        std::fs::rename(&partial, &out).map_err(cannot)?;
-        Ok(written)
+        self.file.finish()
     }
 
     /// Removes the temporary file of a run that failed.
     pub fn abandon(self) {
-        let _ = std::fs::remove_file(&self.partial);
-    }
-}
-
-/// Whether `out` names a JSON file (else CSV); refuses any other ending.
-fn json_of(out: &Path) -> Result<bool, String> {
-    match out.extension().and_then(|e| e.to_str()) {
-        Some("csv") => Ok(false),
-        Some("json") => Ok(true),
-        _ => Err(format!(
-            "--events {}: the file name must end in .csv or .json",
-            out.display()
-        )),
+        self.file.abandon();
     }
 }

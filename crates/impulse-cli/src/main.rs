@@ -25,7 +25,9 @@ mod events;
 mod glb;
 mod html;
 mod interrupt;
+mod joints;
 mod mesh;
+mod partial;
 mod plot;
 mod poses;
 mod progress;
@@ -72,6 +74,11 @@ enum Command {
         /// this .csv or .json file, as the run goes (FILE.partial until the run ends).
         #[arg(long, value_name = "FILE")]
         events: Option<PathBuf>,
+        /// Write the multibodies' joint coordinates and rates (one column per degree of
+        /// freedom, `<multibody>/<joint>.q` and `.qd`) at every frame to this .csv or .json
+        /// file, as the run goes.
+        #[arg(long, value_name = "FILE")]
+        joints: Option<PathBuf>,
         /// Write SVG plots (energy.svg, paths.svg) into this directory.
         #[arg(long)]
         plot: Option<PathBuf>,
@@ -215,6 +222,7 @@ fn main() -> ExitCode {
             until,
             out,
             events,
+            joints,
             plot,
             gltf,
             html,
@@ -227,6 +235,7 @@ fn main() -> ExitCode {
             until: *until,
             out: out.as_deref(),
             events: events.as_deref(),
+            joints: joints.as_deref(),
             plot: plot.as_deref(),
             gltf: gltf.as_deref(),
             html: html.as_deref(),

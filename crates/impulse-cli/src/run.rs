@@ -19,6 +19,8 @@ pub struct RunArgs<'a> {
     pub out: Option<&'a Path>,
     /// Impact events output (.csv or .json).
     pub events: Option<&'a Path>,
+    /// Joint coordinates output (.csv or .json).
+    pub joints: Option<&'a Path>,
     /// Directory for SVG plots.
     pub plot: Option<&'a Path>,
     /// Animated glTF binary output (.glb).
@@ -100,6 +102,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
     for w in scene.warnings() {
         eprintln!("warning: {w}");
     }
+    if let Some(path) = args.joints {
+        crate::joints::JointSink::check(path, &world)?;
+    }
     if let Some(n) = args.threads {
         if n == 0 {
             return Err("--threads 0: need at least one thread".into());
@@ -125,6 +130,10 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         Some(path) => Some(crate::events::EventSink::create(path, &world)?),
         None => None,
     };
+    let mut joints = match args.joints {
+        Some(path) => Some(crate::joints::JointSink::create(path, &world)?),
+        None => None,
+    };
     let rec = impulse_sim::run_streaming(
         &mut world,
         until,
@@ -143,6 +152,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
             if let Some(e) = events.as_mut() {
                 e.frame(f)?;
             }
+            if let Some(j) = joints.as_mut() {
+                j.frame(f)?;
+            }
             Ok(!crate::interrupt::requested()
                 && args
                     .max_wall
@@ -159,6 +171,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
             if let Some(s) = events {
                 s.abandon();
             }
+            if let Some(s) = joints {
+                s.abandon();
+            }
             return Err(e.to_string());
         }
     };
@@ -167,6 +182,9 @@ pub fn run(args: &RunArgs<'_>) -> Result<String, String> {
         s.finish(rec.max_penetration())?;
     }
     if let Some(s) = events {
+        s.finish()?;
+    }
+    if let Some(s) = joints {
         s.finish()?;
     }
     if let Some(path) = args.gltf {

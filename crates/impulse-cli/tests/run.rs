@@ -664,3 +664,98 @@ fn events_with_a_bad_name_are_refused_before_the_run() {
         "{stderr}"
     );
 }
+
+/// `--joints` writes a hinge's angle and rate at every frame of `--out`: the same numbers
+/// read independently from the link's own row of the trajectory (its orientation is a turn of
+/// q about the hinge's y axis, 2·atan2(q_y, q_w); its angular velocity's y component is q̇),
+/// in CSV and JSON alike; a scene without multibodies is refused before the run.
+#[test]
+fn joints_hold_each_frames_coordinates() {
+    /// Both files print shortest round-trip decimals; the angle from the quaternion rounds.
+    const ANGLE_TOL: f64 = 1e-12;
+    let dir = temp_dir("joints");
+    let scene = dir.join("hinge.ron");
+    std::fs::write(
+        &scene,
+        r#"Scene(
+    name: "hinge", duration: 0.5, output_rate: 50.0,
+    bodies: [],
+    multibodies: [Multibody(
+        name: "pendulum", base: Fixed, position: (0.0, 0.0, 1.0),
+        links: [
+            Link(name: "support"),
+            Link(name: "rod", shape: Some(Box(half_extents: (0.02, 0.02, 0.2))),
+                 position: (0.0, 0.0, -0.2), mass: Some(Mass(1.0)), material: "steel"),
+        ],
+        joints: [Joint(name: "hinge", kind: Revolute, parent: "support", child: "rod",
+                       axis: (0.0, 1.0, 0.0), q: 1.2, qd: 0.5)],
+    )],
+)"#,
+    )
+    .unwrap();
+    let (traj, joints, json) = (dir.join("t.csv"), dir.join("j.csv"), dir.join("j.json"));
+    for (out, j) in [(&traj, &joints), (&dir.join("t2.csv"), &json)] {
+        let (ok, _, stderr) = impulse(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--joints",
+            j.to_str().unwrap(),
+        ]);
+        assert!(ok, "{stderr}");
+    }
+    let joints = std::fs::read_to_string(&joints).unwrap();
+    let mut lines = joints.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time,pendulum/hinge.q,pendulum/hinge.qd"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let traj = std::fs::read_to_string(&traj).unwrap();
+    let links: Vec<Vec<f64>> = traj
+        .lines()
+        .filter(|l| l.contains(",pendulum/rod,"))
+        .map(|l| {
+            l.split(',')
+                .filter(|c| *c != "pendulum/rod")
+                .map(|x| x.parse().unwrap())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 26, "0.5 s at 50 Hz and the start");
+    assert_eq!(rows.len(), links.len());
+    for (j, l) in rows.iter().zip(&links) {
+        // time, x, y, z, qx, qy, qz, qw, vx, vy, vz, wx, wy, wz, cx, cy, cz
+        assert_eq!(j[0], l[0]);
+        let angle = 2.0 * l[5].atan2(l[7]);
+        assert!(
+            (angle - j[1]).abs() <= ANGLE_TOL,
+            "t {}: {angle} vs {}",
+            j[0],
+            j[1]
+        );
+        assert!(
+            (l[12] - j[2]).abs() <= ANGLE_TOL,
+            "t {}: {} vs {}",
+            j[0],
+            l[12],
+            j[2]
+        );
+    }
+    assert_eq!(rows[0][1..], [1.2, 0.5]);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["columns"][1], "pendulum/hinge.qd");
+    let frames = v["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), rows.len());
+    assert_eq!(frames[25][1].as_f64().unwrap(), rows[25][1]);
+    let two = scenes().join("two-ball-collision.ron");
+    let (ok, _, stderr) = impulse(&["run", two.to_str().unwrap(), "--joints", "j.csv"]);
+    assert!(
+        !ok && stderr.contains("the scene has no multibodies"),
+        "{stderr}"
+    );
+}

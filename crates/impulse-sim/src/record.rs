@@ -22,6 +22,9 @@ pub struct Frame {
     /// The contacts resolved since the frame before ([`World::contacts`]: collisions and
     /// microcollisions, each with its impulse and normal speeds), in the order resolved.
     pub contacts: Vec<ContactEvent>,
+    /// The multibodies' generalized coordinates ([`World::joint_values`], named by
+    /// [`World::joint_columns`]).
+    pub joints: Vec<f64>,
 }
 
 impl Frame {
@@ -35,6 +38,7 @@ impl Frame {
             potential_energy: world.potential_energy(),
             counters: world.counters(),
             contacts: world.contacts().to_vec(),
+            joints: world.joint_values(),
         }
     }
 }

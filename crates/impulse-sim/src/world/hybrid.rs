@@ -258,6 +258,45 @@ impl World {
         m.self_collision && matches!(m.sim.model().links_adjacent(la, lb), Ok(false))
     }
 
+    /// Names of the multibodies' generalized coordinates, in the order of
+    /// [`World::joint_values`]: for each multibody (the order added), its configuration `q`
+    /// then its velocity `v` (the layout of `impulse_multibody`: a floating base's
+    /// `base.x, base.y, base.z, base.qx, base.qy, base.qz, base.qw` first in `q` and
+    /// `base.vx … base.wz` (base coordinates) first in `v`), each name prefixed by the
+    /// multibody's: `arm/elbow.q`, `arm/elbow.qd`.
+    #[must_use]
+    pub fn joint_columns(&self) -> Vec<String> {
+        let mut names = Vec::new();
+        for m in &self.multibodies {
+            let model = m.sim.model();
+            let base = |cols: &[&str], names: &mut Vec<String>| {
+                if model.is_floating() {
+                    names.extend(cols.iter().map(|c| format!("{}/base.{c}", m.name)));
+                }
+            };
+            base(&["x", "y", "z", "qx", "qy", "qz", "qw"], &mut names);
+            for j in model.joint_names() {
+                names.push(format!("{}/{j}.q", m.name));
+            }
+            base(&["vx", "vy", "vz", "wx", "wy", "wz"], &mut names);
+            for j in model.joint_names() {
+                names.push(format!("{}/{j}.qd", m.name));
+            }
+        }
+        names
+    }
+
+    /// The multibodies' generalized coordinates now, named by [`World::joint_columns`].
+    #[must_use]
+    pub fn joint_values(&self) -> Vec<f64> {
+        let mut values = Vec::new();
+        for m in &self.multibodies {
+            values.extend_from_slice(m.sim.q());
+            values.extend_from_slice(m.sim.v());
+        }
+        values
+    }
+
     /// The multibodies' handles, in the order they were added.
     #[must_use]
     pub fn multibody_handles(&self) -> Vec<MultibodyHandle> {
