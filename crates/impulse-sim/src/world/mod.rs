@@ -877,6 +877,8 @@ mod keys_tests;
 mod control_tests;
 #[cfg(test)]
 mod hybrid_tests;
+#[cfg(test)]
+mod impact_tests;
 
 #[cfg(test)]
 mod self_collision_tests;
