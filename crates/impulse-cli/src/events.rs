@@ -58,7 +58,6 @@ impl EventSink {
     /// Opens `out`'s temporary file for the bodies of `world`.
     pub fn create(out: &Path, world: &World) -> Result<Self, String> {
         let json = is_json(FLAG, out)?;
-        let mut file = PartialFile::create(FLAG, out)?;
         let mut names = Vec::new();
         for (h, b) in world.bodies() {
             let i = h.index() as usize;
@@ -72,9 +71,7 @@ impl EventSink {
         } else {
             format!("{CSV_HEADER}\n")
         };
-        file.writer()
-            .write_all(head.as_bytes())
-            .map_err(|e| format!("{FLAG}: cannot write {}: {e}", file.partial().display()))?;
+        let file = PartialFile::create(FLAG, out, &head)?;
         Ok(Self {
             file,
             json,
@@ -177,15 +174,8 @@ impl EventSink {
     }
 
     /// Ends the file and gives it its name.
-    pub fn finish(mut self) -> Result<(), String> {
-        if self.json {
-            let partial = self.file.partial().display().to_string();
-            self.file
-                .writer()
-                .write_all(b"\n]\n")
-                .map_err(|e| format!("cannot write {partial}: {e}"))?;
-        }
-        self.file.finish()
+    pub fn finish(self) -> Result<(), String> {
+        self.file.finish(if self.json { b"\n]\n" } else { b"" })
     }
 
     /// Removes the temporary file of a run that failed.

@@ -44,7 +44,6 @@ impl JointSink {
     /// Opens `out`'s temporary file and writes the header for `world`'s multibodies.
     pub fn create(out: &Path, world: &World) -> Result<Self, String> {
         let json = is_json(FLAG, out)?;
-        let mut file = PartialFile::create(FLAG, out)?;
         let columns = world.joint_columns();
         let head = if json {
             format!(
@@ -58,9 +57,7 @@ impl JointSink {
                 .collect();
             format!("time,{}\n", cells.join(","))
         };
-        file.writer()
-            .write_all(head.as_bytes())
-            .map_err(|e| format!("{FLAG}: cannot write {}: {e}", file.partial().display()))?;
+        let file = PartialFile::create(FLAG, out, &head)?;
         Ok(Self {
             file,
             json,
@@ -92,15 +89,8 @@ impl JointSink {
     }
 
     /// Ends the file and gives it its name.
-    pub fn finish(mut self) -> Result<(), String> {
-        if self.json {
-            let partial = self.file.partial().display().to_string();
-            self.file
-                .writer()
-                .write_all(b"\n]}\n")
-                .map_err(|e| format!("cannot write {partial}: {e}"))?;
-        }
-        self.file.finish()
+    pub fn finish(self) -> Result<(), String> {
+        self.file.finish(if self.json { b"\n]}\n" } else { b"" })
     }
 
     /// Removes the temporary file of a run that failed.

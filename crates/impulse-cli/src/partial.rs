@@ -13,15 +13,17 @@ pub struct PartialFile {
 }
 
 impl PartialFile {
-    /// Creates `out`'s temporary file; `flag` names the option in errors.
-    pub fn create(flag: &str, out: &Path) -> Result<Self, String> {
+    /// Creates `out`'s temporary file and writes `head` (the format's header); `flag` names
+    /// the option in errors.
+    pub fn create(flag: &str, out: &Path, head: &str) -> Result<Self, String> {
         let mut name = out.file_name().unwrap_or_default().to_os_string();
         name.push(".partial");
         let partial = out.with_file_name(name);
-        let file = std::fs::File::create(&partial)
-            .map_err(|e| format!("{flag}: cannot write {}: {e}", partial.display()))?;
+        let cannot = |e: std::io::Error| format!("{flag}: cannot write {}: {e}", partial.display());
+        let mut file = std::io::BufWriter::new(std::fs::File::create(&partial).map_err(cannot)?);
+        file.write_all(head.as_bytes()).map_err(cannot)?;
         Ok(Self {
-            file: std::io::BufWriter::new(file),
+            file,
             partial,
             out: out.to_path_buf(),
         })
@@ -37,9 +39,11 @@ impl PartialFile {
         &self.partial
     }
 
-    /// Flushes, syncs and gives the file its name.
-    pub fn finish(self) -> Result<(), String> {
+    /// Writes `tail` (what closes the format: a JSON array's bracket), flushes, syncs and
+    /// gives the file its name.
+    pub fn finish(mut self, tail: &[u8]) -> Result<(), String> {
         let cannot = |e: std::io::Error| format!("cannot write {}: {e}", self.out.display());
+        self.file.write_all(tail).map_err(cannot)?;
         let file = self.file.into_inner().map_err(|e| cannot(e.into_error()))?;
         file.sync_all().map_err(cannot)?;
         std::fs::rename(&self.partial, &self.out).map_err(cannot)

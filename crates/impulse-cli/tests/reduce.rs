@@ -132,26 +132,22 @@ fn a_mechanism_over_the_size_limit_names_the_limit() {
         "{}",
         out.stderr
     );
-    let out = impulse(&[
-        "reduce",
-        &mechanism("lever.ron"),
-        "--static",
-        "--max-dof",
-        "0",
-    ]);
-    assert!(
-        !out.ok && out.stderr.contains("over the limit of 0"),
-        "{}",
-        out.stderr
-    );
-    let out = impulse(&[
-        "reduce",
-        &mechanism("lever.ron"),
-        "--static",
-        "--max-dof",
-        "1",
-    ]);
-    assert!(out.ok, "{}", out.stderr);
+    for (limit, ok) in [("0", false), ("1", true)] {
+        let out = impulse(&[
+            "reduce",
+            &mechanism("lever.ron"),
+            "--static",
+            "--max-dof",
+            limit,
+        ]);
+        assert_eq!(out.ok, ok, "{}", out.stderr);
+        assert_eq!(
+            out.stderr.contains("over the limit of 0"),
+            !ok,
+            "{}",
+            out.stderr
+        );
+    }
 }
 
 /// `--html` replays the reduced simulation: the page lists the links in the order of `--out`,

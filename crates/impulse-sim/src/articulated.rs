@@ -408,4 +408,4 @@ pub fn collide_self(
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

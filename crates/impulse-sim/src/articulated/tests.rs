@@ -102,15 +102,21 @@ fn dense_response(model: &Model, q: &[f64], link: LinkId, x: DVec3, p: DVec3) ->
 }
 
 /// M⁻¹·rhs with M the dense joint-space mass matrix (CRBA) at `q`.
-fn dense_solve(model: &Model, q: &[f64], mut rhs: Vec<f64>) -> Vec<f64> {
+fn dense_solve(model: &Model, q: &[f64], rhs: Vec<f64>) -> Vec<f64> {
     let nv = model.nv();
     let mut ws = Workspace::new(model);
     let mut m = Mat::<f64>::zeros(nv, nv);
     mass_matrix(model, &mut ws, q, &mut m).unwrap();
-    // Gaussian elimination with partial pivoting on the dense M.
-    let mut a: Vec<Vec<f64>> = (0..nv)
+    let a: Vec<Vec<f64>> = (0..nv)
         .map(|i| (0..nv).map(|j| m[(i, j)]).collect())
         .collect();
+    gauss_solve(a, rhs)
+}
+
+/// `a⁻¹·rhs` by Gaussian elimination with partial pivoting (small dense systems: the
+/// references of tests).
+pub(crate) fn gauss_solve(mut a: Vec<Vec<f64>>, mut rhs: Vec<f64>) -> Vec<f64> {
+    let nv = rhs.len();
     for col in 0..nv {
         let piv = (col..nv)
             .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))

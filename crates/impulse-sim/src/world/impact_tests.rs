@@ -303,32 +303,6 @@ fn planar_chain(s: &Setup, q: &[f64], x: DVec3, last: usize) -> (Vec<DVec3>, Vec
     (jp, m)
 }
 
-/// `m⁻¹ w` by Gaussian elimination with partial pivoting (n ≤ 3).
-fn solve(mut m: Vec<Vec<f64>>, mut w: Vec<f64>) -> Vec<f64> {
-    let n = w.len();
-    for c in 0..n {
-        let p = (c..n)
-            .max_by(|&a, &b| m[a][c].abs().total_cmp(&m[b][c].abs()))
-            .unwrap();
-        m.swap(c, p);
-        w.swap(c, p);
-        for r in c + 1..n {
-            let f = m[r][c] / m[c][c];
-            let pivot_row = m[c].clone();
-            for (x, p) in m[r][c..].iter_mut().zip(&pivot_row[c..]) {
-                *x -= f * p;
-            }
-            w[r] -= f * w[c];
-        }
-    }
-    let mut y = vec![0.0; n];
-    for r in (0..n).rev() {
-        let tail: f64 = (r + 1..n).map(|k| m[r][k] * y[k]).sum();
-        y[r] = (w[r] - tail) / m[r][r];
-    }
-    y
-}
-
 /// Over the same random chains under gravity (e = 0, μ = 0), the impulse the ball takes —
 /// read from its states around the impact, less gravity's — is the closed form
 /// j = −u_n / (nᵀ J_p M⁻¹ J_pᵀ n + 1/m_b) along the normal, with J_p and M the textbook sums
@@ -365,7 +339,7 @@ fn a_chain_striking_a_ball_under_gravity_gives_the_closed_form_impulse() {
             let last = s.id.index() - 1; // link ids count the ground first
             let (jp, m) = planar_chain(&s, &q, e.point, last);
             let w: Vec<f64> = jp.iter().map(|c| c.dot(n)).collect();
-            let y = solve(m, w.clone());
+            let y = crate::articulated::tests::gauss_solve(m, w.clone());
             let k = w.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>() + 1.0 / s.m_b;
             let j = -e.normal_speed_before / k;
             assert!(
