@@ -93,7 +93,42 @@ pub fn link_maps(
     Ok(maps)
 }
 
+/// Every link's acceleration at `(q, v)` when every generalized acceleration is zero and
+/// there is no gravity (in link order, as [`crate::LinkKinematics`]: the pose, velocity and
+/// angular velocity now, and as `acceleration` and `angular_acceleration` the velocity-product
+/// terms J̇·v of the link frame's origin and of its angular velocity). A point fixed in the
+/// link at x has the acceleration J̇_x·v = a + α × (x − o) + ω × (ω × (x − o)), o the frame
+/// origin: what a velocity-level contact step misses when it reads a link point's velocity at
+/// the step's end through the Jacobian at its start, J(q + h v)·v ≈ J(q)·v + h·J̇·v. One
+/// forward pass of the Newton–Euler recursion (the velocity products c_i of eq. 4.30, the
+/// base's acceleration zero).
+///
+/// # Errors
+/// [`MultibodyError::DimensionMismatch`] for wrong lengths of `q` or `v`.
+pub fn velocity_product_accelerations(
+    model: &Model,
+    ws: &mut Workspace,
+    q: &[f64],
+    v: &[f64],
+) -> Result<Vec<crate::travel::LinkKinematics>, MultibodyError> {
+    let mut h = vec![0.0; model.nv()];
+    // Zero accelerations: the forward pass leaves each body's a = −g (the falling frame)
+    // plus its velocity products; the kinematics add g back.
+    crate::dynamics::bias_forces(model, ws, q, v, &mut h)?;
+    Ok(crate::travel::kinematics(model, ws))
+}
+
 impl Simulation {
+    /// [`velocity_product_accelerations`] at the current state.
+    ///
+    /// # Errors
+    /// As [`velocity_product_accelerations`].
+    pub fn velocity_product_accelerations(
+        &mut self,
+    ) -> Result<Vec<crate::travel::LinkKinematics>, MultibodyError> {
+        velocity_product_accelerations(&self.model, &mut self.ws, &self.q, &self.v)
+    }
+
     /// [`link_maps`] at the current configuration, for a multibody with joints resting on a
     /// stop ([`crate::limit`]): the stop holds such a joint (its constraint force keeps its
     /// velocity at zero as long as the load presses it on), so an impulse's response is the

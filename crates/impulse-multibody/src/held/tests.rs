@@ -239,3 +239,53 @@ fn a_joint_resting_on_its_stop_does_not_give_way_to_an_impulse() {
     assert_eq!(sim.v(), &[0.3, 2.0], "after set_state nothing rests");
     assert!(sim.set_velocity(&[f64::NAN, 0.0]).is_err());
 }
+
+/// The velocity-product accelerations of a point fixed in each link, a + α × r + ω × (ω × r),
+/// equal the derivative of its velocity along the path q(t) = q + t·v at constant v (q̈ = 0),
+/// taken by central differences of the test utilities' Jacobians and poses (composed joint by
+/// joint) — on 40 random spinning chains and trees (revolute and prismatic joints, rates up
+/// to 20 rad/s).
+#[test]
+fn velocity_products_are_the_derivative_of_a_points_velocity_at_constant_rates() {
+    /// Central differences' step along the path (s).
+    const STEP: f64 = 1e-6;
+    /// Their truncation (≈ STEP²·ω³·r, ~1e-10 of ω²·r here) and rounding (≈ 1e-16·v/STEP):
+    /// relative to the acceleration scale ω²·r + 1.
+    const REL: f64 = 1e-8;
+    let mut r = rng(43);
+    for case in 0..40 {
+        let spec = random_spec(&mut r, 1 + case % 6, BaseKind::Fixed, case % 2 == 0, true);
+        let model = spec.model();
+        let (q, v) = random_state(&mut r, &model);
+        let v: Vec<f64> = v.iter().map(|x| 10.0 * x).collect();
+        let mut ws = Workspace::new(&model);
+        let kin = velocity_product_accelerations(&model, &mut ws, &q, &v).unwrap();
+        let at = |t: f64| -> Vec<f64> { q.iter().zip(&v).map(|(a, b)| a + t * b).collect() };
+        for (l, (name, _)) in spec.links.iter().enumerate() {
+            let id = model.link_id(name).unwrap();
+            let local = DVec3::new(0.3, -0.2, 0.5);
+            // The point's velocity at configuration q′ with rates v.
+            let velocity = |qq: &[f64]| -> DVec3 {
+                let rk = reference(&spec, &model, qq);
+                let (pose, j) = (rk.poses[l], &rk.jacobians[l]);
+                let (mut lin, mut ang) = (DVec3::ZERO, DVec3::ZERO);
+                for (c, rate) in v.iter().enumerate() {
+                    lin += DVec3::new(j[(0, c)], j[(1, c)], j[(2, c)]) * *rate;
+                    ang += DVec3::new(j[(3, c)], j[(4, c)], j[(5, c)]) * *rate;
+                }
+                lin + ang.cross(pose.transform_point(local) - pose.translation)
+            };
+            let fd = (velocity(&at(STEP)) - velocity(&at(-STEP))) / (2.0 * STEP);
+            let k = &kin[id.index()];
+            let arm = k.pose.transform_point(local) - k.pose.translation;
+            let ours = k.acceleration
+                + k.angular_acceleration.cross(arm)
+                + k.omega.cross(k.omega.cross(arm));
+            let scale = k.omega.length_squared() * arm.length() + 1.0;
+            assert!(
+                (ours - fd).length() <= REL * scale,
+                "case {case} link {name}: {ours:?} vs {fd:?}"
+            );
+        }
+    }
+}
