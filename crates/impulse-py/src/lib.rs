@@ -33,7 +33,7 @@ use numpy::{AllowTypeChange, IntoPyArray, PyArray2, PyArrayLike1, PyArrayLike2};
 use pyo3::prelude::*;
 
 pyo3::create_exception!(
-    _impulse,
+    impulse,
     ImpulseError,
     pyo3::exceptions::PyValueError,
     "An error of the impulse library: bad input (a NaN, an unknown body, a malformed file) or a \
