@@ -8,7 +8,8 @@
 //! meshes (thesis ch. 6, [`massprops`]), worlds built from scene files or in code and stepped
 //! with every body's state read as one array ([`world`]), articulated-body dynamics of URDF
 //! models (ABA, RNEA, CRBA; thesis ch. 4, [`dynamics`]), pose-study shards and their merge
-//! (thesis §7.5, [`poses`]); turning every library error into the Python exception
+//! (thesis §7.5, [`poses`]), FORK⁻¹S reduced mechanisms' matrices and static response
+//! ([`reduced`]); turning every library error into the Python exception
 //! [`ImpulseError`] carrying the library's message; checking array shapes and finiteness before
 //! anything reaches the library; releasing the GIL (`Python::detach`) around every call that
 //! may take long.
@@ -17,14 +18,13 @@
 //! the CLI is), nor Dask or any scheduler: `impulse.distributed` is plain Python over the
 //! shard and merge functions here.
 //!
-//! `unsafe_code` is denied rather than forbidden: PyO3's `#[pyclass]`, `#[pymethods]` and
-//! `create_exception!` expand to `unsafe` blocks (FFI to CPython) under `#[allow(unsafe_code)]`
-//! that a `forbid` would refuse. None is written by hand.
-#![deny(unsafe_code)]
+//! No `unsafe` of ours: PyO3's macros generate the FFI to CPython.
+#![forbid(unsafe_code)]
 
 mod dynamics;
 mod massprops;
 mod poses;
+mod reduced;
 mod world;
 
 use glam::DVec3;
@@ -127,5 +127,6 @@ fn _impulse(m: &Bound<'_, PyModule>) -> PyResult<()> {
     world::register(m)?;
     dynamics::register(m)?;
     poses::register(m)?;
+    reduced::register(m)?;
     Ok(())
 }

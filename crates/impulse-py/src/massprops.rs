@@ -151,15 +151,15 @@ fn mass_properties_obj(
     .map_err(error)
 }
 
+/// A hull as arrays: vertices (v, 3) and faces (vertex-index lists).
+type HullArrays<'py> = (Bound<'py, PyArray2<f64>>, Vec<Vec<u32>>);
+
 /// The convex hull of `points`, shape (n, 3): its vertices, shape (v, 3), and its faces, a
 /// list of vertex-index lists counter-clockwise seen from outside (coplanar triangles merged
 /// into polygons) — a closed mesh `mass_properties` takes. Raises `ImpulseError` for fewer
 /// than four points or coplanar points.
 #[pyfunction]
-fn convex_hull<'py>(
-    py: Python<'py>,
-    points: Matrix<'_>,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Vec<Vec<u32>>)> {
+fn convex_hull<'py>(py: Python<'py>, points: Matrix<'_>) -> PyResult<HullArrays<'py>> {
     let pts: Vec<DVec3> = crate::points("points", &points)?
         .into_iter()
         .map(DVec3::from_array)

@@ -13,7 +13,9 @@ library's message, which names what is wrong and where.
   models (thesis ch. 4);
 - :class:`PosePart`, :func:`run_pose_shard`, :func:`merge_pose_studies`,
   :func:`pose_summary`: pose studies (thesis §7.5), in shards; :mod:`impulse.distributed`
-  runs them as Dask tasks.
+  runs them as Dask tasks;
+- :class:`ReducedMechanism`: FORK⁻¹S reduced compliant mechanisms, their matrices and static
+  response beside the full nonlinear statics.
 """
 
 from ._impulse import (
@@ -21,6 +23,7 @@ from ._impulse import (
     MassProperties,
     Model,
     PosePart,
+    ReducedMechanism,
     Shape,
     World,
     aba,
@@ -39,6 +42,7 @@ __all__ = [
     "MassProperties",
     "Model",
     "PosePart",
+    "ReducedMechanism",
     "Shape",
     "World",
     "aba",

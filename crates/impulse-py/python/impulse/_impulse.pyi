@@ -47,6 +47,9 @@ def mass_properties(
 ) -> MassProperties:
     """vertices (n, 3); faces (m, k) ints or index lists, counter-clockwise from outside."""
 
+def convex_hull(points: _Vec) -> Tuple[_F64, list[list[int]]]:
+    """Hull of points (n, 3): vertices (v, 3) and faces (index lists, counter-clockwise)."""
+
 def mass_properties_obj(
     path: _Path, density: Optional[float] = None, mass: Optional[float] = None
 ) -> MassProperties:
@@ -207,3 +210,28 @@ def merge_pose_studies(studies: Sequence[str]) -> str:
 def pose_summary(
     part: PosePart, study: str, cone: float = 20.0, confidence: float = 0.95
 ) -> dict[str, Any]: ...
+
+# Reduced compliant mechanisms (FORK⁻¹S)
+
+class ReducedMechanism:
+    """A FORK⁻¹S reduced model built at rest; E end effectors."""
+
+    @staticmethod
+    def from_file(path: _Path, tsvd: Optional[float] = None) -> ReducedMechanism: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def rank(self) -> int: ...
+    def end_effectors(self) -> list[str]: ...
+    def compliance(self) -> _F64:
+        """C, shape (6E, 6E)."""
+    def stiffness(self) -> _F64:
+        """K = C⁺, shape (6E, 6E)."""
+    def mass(self) -> _F64:
+        """M, shape (6E, 6E)."""
+    def reference_positions(self) -> _F64:
+        """Shape (E, 3)."""
+    def static_positions(self, loads: dict[str, _Vec]) -> _F64:
+        """Reduced static response, shape (E, 3); loads: link -> force (3,) or wrench (6,)."""
+    def full_static_positions(self, loads: dict[str, _Vec]) -> _F64:
+        """Full nonlinear statics, shape (E, 3)."""

@@ -66,7 +66,6 @@ def pose_study_graph(
             seed=seed,
             shard=(k, shards),
             threads=threads_per_shard,
-            dask_key_name=f"impulse-pose-shard-{k}-of-{shards}-{id(part):x}",
             **settings,
         )
         for k in range(shards)
