@@ -9,9 +9,14 @@ use std::time::Instant;
 
 use impulse_sim::{Scene, World};
 
+/// Calls of `step(0)` per round of the per-call cost.
+const STEP0_CALLS: usize = 20_000;
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let path = args.next().ok_or("usage: step_bench SCENE.ron [STEPS] [DT]")?;
+    let path = args
+        .next()
+        .ok_or("usage: step_bench SCENE.ron [STEPS] [DT]")?;
     let steps: usize = args.next().map_or(Ok(1000), |s| s.parse())?;
     let dt: f64 = args.next().map_or(Ok(1e-3), |s| s.parse())?;
     let mut world = World::from_scene(&Scene::read(std::path::Path::new(&path))?)?;
@@ -36,8 +41,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         checksum += rows.iter().map(|r| r[2]).sum::<f64>();
     }
     let wall = start.elapsed().as_secs_f64();
+    // What a call that simulates nothing costs (`step(0)`: the checks and the copy of the
+    // world a failed step is rolled back to), best of three rounds: the Python side's same
+    // call costs this plus the binding's own work.
+    let mut step0 = f64::INFINITY;
+    for _ in 0..3 {
+        let start = Instant::now();
+        for _ in 0..STEP0_CALLS {
+            world.step(0.0)?;
+        }
+        step0 = step0.min(start.elapsed().as_secs_f64() / STEP0_CALLS as f64);
+    }
     println!(
-        "{{\"bodies\": {}, \"steps\": {steps}, \"dt\": {dt}, \"wall\": {wall}, \"checksum\": {checksum}}}",
+        "{{\"bodies\": {}, \"steps\": {steps}, \"dt\": {dt}, \"wall\": {wall}, \"checksum\": {checksum}, \"step0\": {step0}}}",
         world.len()
     );
     Ok(())
