@@ -51,14 +51,13 @@ def python_loop(path, steps, dt):
         w.step(dt)
         s = w.states()
         checksum += s[:, 2].sum()
-    return time.perf_counter() - start, checksum, len(w)
+    return time.perf_counter() - start, checksum, w
 
 
-def overhead(path, calls=20000):
+def overhead(w, calls=20000):
     """The binding's own cost per call, measured on calls that do no simulation: step(0)
     (argument checks, the GIL released and taken back, the report dict) and states() (n
-    rows copied into a new array)."""
-    w = impulse.World.from_scene(path)
+    rows copied into a new array), on the world the loop left (as the Rust side measures)."""
     best = {}
     for name, call in [("step(0)", lambda: w.step(0.0)), ("states()", w.states)]:
         for _ in range(3):
@@ -85,14 +84,15 @@ def main():
             rust = json.loads(subprocess.run(
                 [exe, path, str(args.steps), str(args.dt)], check=True, capture_output=True,
                 text=True).stdout)
-            py_wall, py_sum, n = python_loop(path, args.steps, args.dt)
+            py_wall, py_sum, world = python_loop(path, args.steps, args.dt)
+            n = len(world)
             # The same trajectory: the sums differ only by summation order (NumPy's pairwise).
             assert abs(rust["checksum"] - py_sum) <= 1e-12 * abs(py_sum), (rust, py_sum)
             print(f"run {k}: {n} bodies, {args.steps} steps of {args.dt} s: "
                   f"Rust {rust['wall']:.3f} s, Python {py_wall:.3f} s, "
                   f"ratio {py_wall / rust['wall']:.3f}")
             best_rust, best_py = min(best_rust, rust["wall"]), min(best_py, py_wall)
-        cost = overhead(path)
+        cost = overhead(world)
         print(f"step(0) per call: Rust {1e6 * rust['step0']:.1f} µs, Python "
               f"{1e6 * cost['step(0)']:.1f} µs; states() {1e6 * cost['states()']:.1f} µs")
         # The fastest of each: the run least disturbed by other work on the machine.
