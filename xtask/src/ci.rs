@@ -2,7 +2,8 @@
 //!
 //! The steps are: `cargo fmt --all -- --check`; `cargo clippy --workspace --all-targets -- -D
 //! warnings`; `cargo test --workspace` (explicitly the whole workspace: the default members
-//! leave out xtask, whose own tests must run too); `cargo doc --workspace --no-deps` with
+//! leave out xtask, whose own tests must run too); `python` (the `impulse` Python package built
+//! with maturin into `target/py-venv` and its pytest suite run: [`crate::python`]); `cargo doc --workspace --no-deps` with
 //! `RUSTDOCFLAGS=-D warnings` (broken intra-doc links fail); the layering check, the packaging
 //! check (every crate under `crates/` packaged for crates.io in layer order, without building the
 //! packages: see [`crate::package`] for what is checked and why), `validate` and `viewer`
@@ -12,7 +13,7 @@
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use crate::{Result, cargo, layering, package, validate, viewer, workspace_root};
+use crate::{Result, cargo, layering, package, python, validate, viewer, workspace_root};
 
 /// One step of the sequence.
 enum Step {
@@ -62,6 +63,7 @@ const STEPS: &[Step] = &[
         "warnings",
     ]),
     Step::Cargo(&["test", "--workspace"]),
+    Step::InProcess("python", python::run),
     Step::CargoEnv(
         &["doc", "--workspace", "--no-deps"],
         &[("RUSTDOCFLAGS", "-D warnings")],
@@ -142,6 +144,7 @@ mod tests {
                 "cargo fmt --all -- --check",
                 "cargo clippy --workspace --all-targets -- -D warnings",
                 "cargo test --workspace",
+                "python",
                 "RUSTDOCFLAGS='-D warnings' cargo doc --workspace --no-deps",
                 "layering",
                 "package",

@@ -13,7 +13,8 @@
 //! crates and compare with independent references; xtask holds no geometry or physics of its
 //! own, and no library crate may learn about validation cases or snapshots.
 //!
-//! Modules: [`ci`] (the step sequence), [`layering`], [`package`], [`validate`] (harness,
+//! Modules: [`ci`] (the step sequence), [`layering`], [`package`], [`python`] (the Python
+//! package's build and tests), [`validate`] (harness,
 //! checks, snapshots), [`cases`] (the registry). Dependencies are kept minimal: insta and serde_json only; the
 //! command line is parsed by hand.
 
@@ -30,6 +31,7 @@ mod package;
 mod peers;
 mod plot;
 mod poses;
+mod python;
 mod scale;
 mod stacks;
 mod validate;
@@ -47,8 +49,12 @@ usage: cargo xtask <command>
 
 commands:
   ci                                  cargo fmt --check, clippy -D warnings, test --workspace,
-                                      doc, layering, package, validate, viewer; stops at the
-                                      first failure
+                                      python, doc, layering, package, validate, viewer; stops
+                                      at the first failure
+  python                              build the `impulse` Python package (maturin, release)
+                                      into target/py-venv (made from
+                                      crates/impulse-py/requirements-ci.txt when absent or
+                                      out of date) and run its pytest suite
   validate [--update] [--case NAME]   run the validation cases (all, or only NAME), check each
                                       metric against its reference, compare with the snapshots
                                       in fixtures/snapshots/; --update writes the snapshots
@@ -96,6 +102,7 @@ enum Command {
     Bench(bench::Options),
     Layering,
     Package,
+    Python,
     Viewer,
     Help,
 }
@@ -115,6 +122,7 @@ fn main() -> ExitCode {
         Command::Bench(options) => bench::run_bench(&options),
         Command::Layering => layering::run(),
         Command::Package => package::run(),
+        Command::Python => python::run(),
         Command::Viewer => viewer::run(),
         Command::Help => {
             print!("{USAGE}");
@@ -143,6 +151,7 @@ fn parse_args(args: &[String]) -> Result<Command> {
         "ci" => no_arguments(Command::Ci),
         "layering" => no_arguments(Command::Layering),
         "package" => no_arguments(Command::Package),
+        "python" => no_arguments(Command::Python),
         "viewer" => no_arguments(Command::Viewer),
         "help" | "-h" | "--help" => no_arguments(Command::Help),
         "validate" => parse_validate(rest).map(Command::Validate),
@@ -236,6 +245,7 @@ mod tests {
         assert_eq!(parse(&["ci"]), Ok(Command::Ci));
         assert_eq!(parse(&["layering"]), Ok(Command::Layering));
         assert_eq!(parse(&["package"]), Ok(Command::Package));
+        assert_eq!(parse(&["python"]), Ok(Command::Python));
         assert_eq!(parse(&["help"]), Ok(Command::Help));
         assert_eq!(
             parse(&["validate"]),

@@ -2,13 +2,15 @@
 //! crates.io, so that a user can depend on any of them.
 //!
 //! The crates are those of the layer table of `docs/architecture.md` (status `built`) whose
-//! directory is under `crates/`, in layer order: the eight libraries and the `impulse` program
+//! directory is under `crates/`, in layer order: the eight libraries, the `impulse` program and
+//! the Python extension `impulse-py`
 //! (`xtask` is `publish = false`). What is checked:
 //! - **files**: each crate's `LICENSE-MIT` and `LICENSE-APACHE` equal the workspace root's
 //!   (cargo packages only files under a crate's own directory, so each crate carries a copy);
 //!   each library crate's `README.md` shows its example `examples/readme_<name>.rs` (`<name>`
 //!   without `impulse-`) verbatim after the file's `//!` header, in a `rust` block: the README's
-//!   example is a program `cargo test` and clippy build;
+//!   example is a program `cargo test` and clippy build (not for `impulse-py`, a Python
+//!   extension: its README's Python example is run by its pytest suite);
 //! - **metadata** (`cargo metadata`): a description, a license, keywords, categories and a
 //!   readme;
 //! - **contents** (`cargo package --list -p <crate>`, one crate at a time): README.md and both
@@ -180,8 +182,10 @@ fn check_files(root: &Path, name: &str) -> Vec<String> {
             (_, Err(e)) => problems.push(format!("cannot read crates/{name}/{license}: {e}")),
         }
     }
-    if !dir.join("src/lib.rs").is_file() {
-        return problems; // a program: no example to show
+    if !dir.join("src/lib.rs").is_file() || dir.join("pyproject.toml").is_file() {
+        // A program, or the Python extension (impulse-py: its README shows Python, which its
+        // pytest suite runs): no Rust example to show.
+        return problems;
     }
     let short = name.strip_prefix("impulse-").unwrap_or(name);
     let example_path = format!("crates/{name}/examples/readme_{short}.rs");
@@ -356,7 +360,7 @@ mod tests {
     #[test]
     fn the_workspace_files_pass() {
         let root = workspace_root();
-        for name in ["impulse-geom", "impulse-sim", "impulse-cli"] {
+        for name in ["impulse-geom", "impulse-sim", "impulse-cli", "impulse-py"] {
             assert_eq!(check_files(&root, name), Vec::<String>::new());
         }
     }

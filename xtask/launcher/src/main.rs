@@ -4,11 +4,11 @@
 //! It has no dependencies, so on a fresh clone it is built in about a second; it then checks
 //! that the machine has what the subcommand needs beyond the Rust toolchain
 //! ([`prerequisites::PREREQUISITES`]: rustfmt and clippy for `ci`, Chromium for `ci` and
-//! `viewer`), installs what is missing where it can (a system package as root or with sudo
+//! `viewer`, Python 3 for `ci` and `python`), installs what is missing where it can (a system package as root or with sudo
 //! that asks no password; a rustup component), and otherwise stops with a message naming the
 //! program, why it is needed and the command that gets it — all before the minutes that
 //! building `xtask` and the workspace take. Then it runs `cargo run -p xtask -- <args>` with
-//! the programs it found in their environment variables (`CHROMIUM`).
+//! the programs it found in their environment variables (`CHROMIUM`, `PYTHON`).
 //!
 //! `XTASK_NO_INSTALL=1` turns installing off: missing programs are reported with the commands
 //! that would get them.

@@ -167,6 +167,24 @@ pub const PREREQUISITES: &[Prerequisite] = &[
             (Manager::Apk, "chromium"),
         ]),
     },
+    Prerequisite {
+        name: "python3",
+        purpose: "the python step builds the `impulse` Python package into a virtual \
+                  environment (`python3 -m venv`, target/py-venv) and runs its pytest suite",
+        needed_by: &["ci", "python"],
+        probe: Probe::Program {
+            env: "PYTHON",
+            programs: &["python3", "python"],
+        },
+        // Debian splits `venv` out of python3; its package pulls python3 in.
+        install: Install::SystemPackage(&[
+            (Manager::Apt, "python3-venv"),
+            (Manager::Dnf, "python3"),
+            (Manager::Pacman, "python"),
+            (Manager::Zypper, "python3"),
+            (Manager::Apk, "python3"),
+        ]),
+    },
 ];
 
 /// The prerequisites of a subcommand (none for one that needs nothing beyond Rust).
@@ -578,6 +596,10 @@ mod tests {
         assert_eq!(
             needed_by("viewer").map(|p| p.name).collect::<Vec<_>>(),
             ["chromium"]
+        );
+        assert_eq!(
+            needed_by("python").map(|p| p.name).collect::<Vec<_>>(),
+            ["python3"]
         );
     }
 }

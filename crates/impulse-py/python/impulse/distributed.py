@@ -1,0 +1,110 @@
+"""Pose studies spread over a Dask cluster: one task per shard, merged by the library.
+
+A pose study (thesis §7.5) of ``drops`` drops is cut into ``shards`` shards (shard K runs drops
+K, K + N, K + 2N, ...); each shard is one Dask task calling :func:`impulse.run_pose_shard` on a
+worker, and one last task merges their files with :func:`impulse.merge_pose_studies`, the
+library's own merge. A drop's outcome depends only on (seed, drop index), so the merged file is
+byte for byte the file ``impulse poses PART --drops DROPS --seed SEED --out FILE`` writes on one
+machine, whatever the number of shards, workers or threads.
+
+Example (a local cluster of two worker processes)::
+
+    from dask.distributed import Client, LocalCluster
+    import impulse
+    from impulse.distributed import pose_study
+
+    part = impulse.PosePart.from_file("fixtures/parts/box-1x2x3.ron")
+    with LocalCluster(n_workers=2, threads_per_worker=1) as cluster, Client(cluster) as client:
+        text = pose_study(part, drops=2000, shards=8, client=client)
+    table = impulse.pose_summary(part, text)
+
+Without Dask, the same shards run as a Slurm job array of ``impulse poses --shard K/N`` and
+``impulse poses merge`` (the README's "impulse poses" section has the script).
+
+Dask is imported only when these functions are called: ``pip install "dask[distributed]"``.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Optional, Union
+
+from . import _impulse
+
+__all__ = ["pose_study", "pose_study_graph"]
+
+
+def pose_study_graph(
+    part: _impulse.PosePart,
+    drops: int,
+    shards: int,
+    *,
+    seed: int = 1,
+    threads_per_shard: int = 1,
+    **settings: Any,
+):
+    """The study as a Dask graph: a ``dask.delayed`` object whose value is the merged file text.
+
+    One task per shard (``impulse.run_pose_shard(part, drops, seed=seed, shard=(k, shards),
+    threads=threads_per_shard, **settings)``) and one merge task. ``settings`` are the drop
+    settings of :func:`impulse.run_pose_shard` (``height``, ``exit_speed``, ``friction``,
+    ``restitution``, ``epsilon``, ``jitter``, ``uniform_only``, ``max_time``). The part is
+    shipped to the workers pickled (by its file path, which must be readable there, or by its
+    description). Compute it with any Dask scheduler.
+    """
+    import dask
+
+    if not isinstance(shards, int) or shards < 1:
+        raise _impulse.ImpulseError(f"shards = {shards!r}: need a whole number ≥ 1")
+    if not isinstance(drops, int) or drops < 1:
+        raise _impulse.ImpulseError(f"drops = {drops!r}: a study needs at least one drop")
+    run = dask.delayed(_impulse.run_pose_shard, pure=True)
+    parts = [
+        run(
+            part,
+            drops,
+            seed=seed,
+            shard=(k, shards),
+            threads=threads_per_shard,
+            **settings,
+        )
+        for k in range(shards)
+    ]
+    return dask.delayed(_impulse.merge_pose_studies, pure=True)(parts)
+
+
+def pose_study(
+    part: _impulse.PosePart,
+    drops: int,
+    shards: int,
+    *,
+    client: Optional[Any] = None,
+    seed: int = 1,
+    threads_per_shard: int = 1,
+    out: Optional[Union[str, os.PathLike]] = None,
+    **settings: Any,
+) -> str:
+    """Runs a pose study as ``shards`` Dask tasks and returns the merged study file's text.
+
+    ``client``: a ``dask.distributed.Client`` (default: the current client if there is one,
+    else Dask's default scheduler). ``out``: also write the text to this file, as ``impulse
+    poses --out`` does. The text equals, byte for byte, the file of the same study run in one
+    process (``impulse.run_pose_shard(part, drops, seed=seed)``) or by ``impulse poses``.
+    Read the estimates with :func:`impulse.pose_summary`. A failed shard raises its
+    :class:`impulse.ImpulseError` here.
+    """
+    graph = pose_study_graph(
+        part, drops, shards, seed=seed, threads_per_shard=threads_per_shard, **settings
+    )
+    if client is None:
+        try:
+            from dask.distributed import get_client
+
+            client = get_client()
+        except (ImportError, ValueError):
+            client = None
+    text = client.compute(graph).result() if client is not None else graph.compute()
+    if out is not None:
+        with open(out, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+    return text

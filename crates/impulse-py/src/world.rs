@@ -1,0 +1,499 @@
+//! Worlds of rigid bodies (thesis chapters 1–3 and 7): from scene files or built in code,
+//! stepped with the GIL released, every body's state read as one array per quantity.
+
+use std::path::PathBuf;
+use std::sync::{Mutex, MutexGuard, PoisonError};
+
+use glam::{DQuat, DVec3};
+use impulse_sim::scene::{BodyDesc, MassDesc, MotionDesc, PartDesc, RotationDesc, ShapeDesc};
+use impulse_sim::{
+    BodyHandle, ContactMode, Load, Material, Scene, SimError, StepReport, World, WorldSettings,
+};
+use numpy::PyArray2;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::{Matrix, Vector, error, finite_vector, rows_to_array, vec3};
+
+/// The RON options of scene files: optional fields without `Some(…)`.
+fn ron_options() -> ron::Options {
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
+/// The shape of a body, as a scene file's `shape:` field describes it (in the body's own
+/// frame). Build one with the static constructors; `repr()` is its scene-file text.
+#[pyclass(frozen, module = "impulse._impulse")]
+#[derive(Clone)]
+pub struct Shape {
+    pub(crate) desc: ShapeDesc,
+}
+
+#[pymethods]
+impl Shape {
+    /// A box centred on the frame origin; `half_extents`: shape (3,).
+    #[staticmethod]
+    #[pyo3(name = "box")]
+    fn box_(half_extents: Vector<'_>) -> PyResult<Self> {
+        Ok(Self {
+            desc: ShapeDesc::cuboid(vec3("half_extents", &half_extents)?),
+        })
+    }
+
+    /// An exact sphere centred on the frame origin.
+    #[staticmethod]
+    fn sphere(radius: f64) -> Self {
+        Self {
+            desc: ShapeDesc::sphere(radius),
+        }
+    }
+
+    /// The convex hull of `points`, shape (n, 3), n ≥ 4 and not coplanar.
+    #[staticmethod]
+    fn hull(points: Matrix<'_>) -> PyResult<Self> {
+        Ok(Self {
+            desc: ShapeDesc::hull(crate::points("points", &points)?),
+        })
+    }
+
+    /// A convex polyhedron read from an OBJ file when the body is built (a relative path
+    /// resolves against the world's base directory, the scene file's directory).
+    #[staticmethod]
+    fn obj(path: PathBuf) -> Self {
+        Self {
+            desc: ShapeDesc::Obj {
+                path: path.to_string_lossy().into_owned(),
+            },
+        }
+    }
+
+    /// A right prism over a regular polygon of `sides` sides and circumradius `radius`, axis
+    /// along z, `half_height` along it.
+    #[staticmethod]
+    fn prism(sides: u32, radius: f64, half_height: f64) -> Self {
+        Self {
+            desc: ShapeDesc::prism(sides, radius, half_height),
+        }
+    }
+
+    /// An ellipsoid with `semi_axes` (shape (3,)): exact and smooth, or with `level` the
+    /// inscribed polyhedron of that refinement.
+    #[staticmethod]
+    #[pyo3(signature = (semi_axes, level=None))]
+    fn ellipsoid(semi_axes: Vector<'_>, level: Option<u32>) -> PyResult<Self> {
+        Ok(Self {
+            desc: ShapeDesc::Ellipsoid {
+                semi_axes: vec3("semi_axes", &semi_axes)?,
+                level,
+            },
+        })
+    }
+
+    /// A non-convex body: convex `parts`, each a tuple (shape, position (3,), rotation as a
+    /// quaternion (x, y, z, w)) in the body frame.
+    #[staticmethod]
+    fn compound(parts: Vec<(Bound<'_, Shape>, Vector<'_>, Vector<'_>)>) -> PyResult<Self> {
+        let mut descs = Vec::with_capacity(parts.len());
+        for (k, (shape, position, rotation)) in parts.iter().enumerate() {
+            let q = finite_vector(&format!("parts[{k}] rotation"), rotation, Some(4))?;
+            descs.push(PartDesc {
+                position: vec3(&format!("parts[{k}] position"), position)?,
+                ..PartDesc::new(shape.get().desc.clone())
+                    .with_rotation(RotationDesc::Quaternion(q[0], q[1], q[2], q[3]))
+            });
+        }
+        Ok(Self {
+            desc: ShapeDesc::compound(descs),
+        })
+    }
+
+    /// A shape from its scene-file text, e.g. `Box(half_extents: (1, 1, 0.1))`.
+    #[staticmethod]
+    fn from_ron(text: &str) -> PyResult<Self> {
+        let desc = ron_options()
+            .from_str(text)
+            .map_err(|e| error(format!("shape: {e}")))?;
+        Ok(Self { desc })
+    }
+
+    /// The scene-file text of the shape (exact: numbers are written to round-trip).
+    fn to_ron(&self) -> PyResult<String> {
+        ron::ser::to_string(&self.desc).map_err(error)
+    }
+
+    fn __repr__(&self) -> PyResult<String> {
+        Ok(format!("Shape.from_ron({:?})", self.to_ron()?))
+    }
+
+    /// Pickles as its scene-file text (for Dask and multiprocessing).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let from_ron = slf.get_type().getattr("from_ron")?;
+        Ok((from_ron, (slf.get().to_ron()?,)))
+    }
+}
+
+/// The contact model named `name`: `"switching"` or `"impulse"`.
+fn contact_mode(name: &str) -> PyResult<ContactMode> {
+    match name {
+        "switching" => Ok(ContactMode::Switching),
+        "impulse" => Ok(ContactMode::Impulse),
+        other => Err(error(format!(
+            "contact_model \"{other}\": expected \"switching\" or \"impulse\""
+        ))),
+    }
+}
+
+/// A world of fixed and dynamic rigid bodies that collide by impulses (thesis ch. 1–3):
+/// `World(...)` for an empty one built in code, `World.from_scene(path)` from a scene file.
+///
+/// Bodies are numbered in the order they were added (a scene file's order; multibody links
+/// after the bodies); every array method returns one row per body in that order, `names()`
+/// gives it. Steps release the GIL.
+#[pyclass(frozen, name = "World", module = "impulse._impulse")]
+pub struct PyWorld {
+    world: Mutex<World>,
+    /// The contact model the world was built with.
+    mode: ContactMode,
+}
+
+impl PyWorld {
+    /// The world, locked, for a short read (waits without the GIL if another thread holds it).
+    fn read<T: Send>(&self, py: Python<'_>, f: impl FnOnce(&mut World) -> T + Send) -> T {
+        match self.world.try_lock() {
+            Ok(mut w) => f(&mut w),
+            Err(_) => py.detach(|| f(&mut self.locked())),
+        }
+    }
+
+    fn locked(&self) -> MutexGuard<'_, World> {
+        self.world.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Runs a long call with the GIL released.
+    fn long<T: Send>(
+        &self,
+        py: Python<'_>,
+        f: impl FnOnce(&mut World) -> Result<T, SimError> + Send,
+    ) -> PyResult<T> {
+        py.detach(|| f(&mut self.locked()).map_err(|e| e.to_string()))
+            .map_err(error)
+    }
+
+    /// The handle of the body called `name`.
+    fn handle(world: &World, name: &str) -> Result<BodyHandle, SimError> {
+        world.handle(name).ok_or_else(|| SimError::Invalid {
+            what: format!("body \"{name}\""),
+            field: "name".into(),
+            problem: format!(
+                "no body of that name in the world (it has {} bodies)",
+                world.len()
+            ),
+        })
+    }
+
+    /// One row per body of `f(state)`.
+    fn rows<'py, const K: usize>(
+        &self,
+        py: Python<'py>,
+        f: impl Fn(&impulse_sim::BodyState) -> [f64; K] + Send + Sync,
+    ) -> Bound<'py, PyArray2<f64>> {
+        let flat: Vec<[f64; K]> =
+            self.read(py, |w| w.bodies().map(|(_, b)| f(&b.state())).collect());
+        rows_to_array(py, flat.into_iter())
+    }
+}
+
+/// A step report as a dict.
+fn report_dict<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("start", r.start)?;
+    d.set_item("end", r.end)?;
+    d.set_item("contacts", r.contacts)?;
+    let c = &r.counters;
+    d.set_item("steps", c.steps)?;
+    d.set_item("collisions", c.collisions)?;
+    d.set_item("microcollisions", c.microcollisions)?;
+    d.set_item("island_steps", c.island_steps)?;
+    d.set_item("unresolved", c.unresolved)?;
+    Ok(d)
+}
+
+#[pymethods]
+impl PyWorld {
+    /// An empty world. `collision_epsilon`: ε_c (length); `gravity`: shape (3,); `friction`
+    /// and `restitution`: the default contact of material pairs (Coulomb μ, Stronge's
+    /// energetic e); `contact_model`: `"switching"` (impacts as impulses, sustained contact as
+    /// constraints; the default) or `"impulse"` (every contact an impulse, the thesis's
+    /// model); `base_dir`: where relative OBJ paths of shapes resolve.
+    #[new]
+    #[pyo3(signature = (collision_epsilon=1e-4, gravity=None, friction=0.3, restitution=0.5,
+                        contact_model="switching", base_dir=None))]
+    fn new(
+        collision_epsilon: f64,
+        gravity: Option<Vector<'_>>,
+        friction: f64,
+        restitution: f64,
+        contact_model: &str,
+        base_dir: Option<PathBuf>,
+    ) -> PyResult<Self> {
+        let mut settings = WorldSettings::new(collision_epsilon);
+        if let Some(g) = gravity {
+            settings.gravity = DVec3::from_array(vec3("gravity", &g)?);
+        }
+        settings.default_contact = Material {
+            friction,
+            restitution,
+        };
+        let mode = contact_mode(contact_model)?;
+        settings.contact_mode = mode;
+        if let Some(dir) = base_dir {
+            settings.base_dir = dir;
+        }
+        Ok(Self {
+            world: Mutex::new(World::new(settings).map_err(error)?),
+            mode,
+        })
+    }
+
+    /// A world built from a scene file (RON; see `fixtures/scenes/`), as `impulse run` builds
+    /// it; `contact_model` (`"switching"` or `"impulse"`) overrides the file's. Raises
+    /// `ImpulseError` for a missing file, a parse error (with line and column) or an invalid
+    /// scene (naming the body and field).
+    #[staticmethod]
+    #[pyo3(signature = (path, contact_model=None))]
+    fn from_scene(py: Python<'_>, path: PathBuf, contact_model: Option<&str>) -> PyResult<Self> {
+        let mode = contact_model.map(contact_mode).transpose()?;
+        let (world, mode) = py
+            .detach(|| {
+                let mut scene = Scene::read(&path)?;
+                if let Some(m) = mode {
+                    scene.desc.contact_model = m;
+                }
+                Ok::<_, SimError>((World::from_scene(&scene)?, scene.desc.contact_model))
+            })
+            .map_err(error)?;
+        Ok(Self {
+            world: Mutex::new(world),
+            mode,
+        })
+    }
+
+    /// Adds a body; returns its row in the state arrays.
+    ///
+    /// `shape`: a `Shape`; `position`: (3,), the origin of the body's own frame; `rotation`:
+    /// quaternion (x, y, z, w); `velocity`, `angular_velocity`: (3,); `density` or `mass`
+    /// (default density 1); `material`: the name material pairs refer to; `fixed`: a body
+    /// that never moves. Raises `ImpulseError` for a duplicate name, a bad value (naming the
+    /// field) or a deep overlap with a body already there.
+    #[pyo3(signature = (name, shape, position=None, rotation=None, velocity=None,
+                        angular_velocity=None, density=None, mass=None, material=None,
+                        fixed=false))]
+    #[allow(clippy::too_many_arguments)] // Python keyword arguments, all optional
+    fn add_body(
+        &self,
+        py: Python<'_>,
+        name: String,
+        shape: &Shape,
+        position: Option<Vector<'_>>,
+        rotation: Option<Vector<'_>>,
+        velocity: Option<Vector<'_>>,
+        angular_velocity: Option<Vector<'_>>,
+        density: Option<f64>,
+        mass: Option<f64>,
+        material: Option<String>,
+        fixed: bool,
+    ) -> PyResult<usize> {
+        let mut desc = BodyDesc::new(name, shape.desc.clone());
+        if let Some(p) = position {
+            desc.position = vec3("position", &p)?;
+        }
+        if let Some(q) = rotation {
+            let q = finite_vector("rotation", &q, Some(4))?;
+            desc.rotation = RotationDesc::Quaternion(q[0], q[1], q[2], q[3]);
+        }
+        if let Some(v) = velocity {
+            desc.velocity = vec3("velocity", &v)?;
+        }
+        if let Some(w) = angular_velocity {
+            desc.angular_velocity = vec3("angular_velocity", &w)?;
+        }
+        desc.mass = match (density, mass) {
+            (Some(_), Some(_)) => return Err(error("give a density or a mass, not both")),
+            (Some(d), None) => Some(MassDesc::Density(d)),
+            (None, Some(m)) => Some(MassDesc::Mass(m)),
+            (None, None) => None,
+        };
+        if let Some(m) = material {
+            desc.material = m;
+        }
+        if fixed {
+            desc.motion = MotionDesc::Fixed;
+        }
+        self.long(py, |w| {
+            let h = w.add_body(&desc)?;
+            Ok(w.handles().iter().position(|&x| x == h).unwrap_or(0))
+        })
+    }
+
+    /// Sets the contact (Coulomb `friction`, Stronge `restitution`) of materials `a` and `b`.
+    fn set_material_pair(
+        &self,
+        py: Python<'_>,
+        a: &str,
+        b: &str,
+        friction: f64,
+        restitution: f64,
+    ) -> PyResult<()> {
+        self.long(py, |w| {
+            w.set_material_pair(
+                a,
+                b,
+                Material {
+                    friction,
+                    restitution,
+                },
+            )
+        })
+    }
+
+    /// Advances the world by `dt` (s) with the GIL released; returns a report (dict: start,
+    /// end, contacts, steps, collisions, microcollisions, island_steps, unresolved).
+    fn step<'py>(&self, py: Python<'py>, dt: f64) -> PyResult<Bound<'py, PyDict>> {
+        let r = self.long(py, |w| w.step(dt))?;
+        report_dict(py, &r)
+    }
+
+    /// Advances the world to time `t` (s) with the GIL released; returns a report as `step`.
+    fn step_until<'py>(&self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyDict>> {
+        let r = self.long(py, |w| w.step_until(t))?;
+        report_dict(py, &r)
+    }
+
+    /// The simulated time (s).
+    #[getter]
+    fn time(&self, py: Python<'_>) -> f64 {
+        self.read(py, |w| w.time())
+    }
+
+    /// The contact model: `"switching"` or `"impulse"`.
+    #[getter]
+    fn contact_model(&self) -> &'static str {
+        match self.mode {
+            ContactMode::Switching => "switching",
+            ContactMode::Impulse => "impulse",
+        }
+    }
+
+    /// Number of bodies.
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.read(py, |w| w.len())
+    }
+
+    /// The bodies' names, in row order.
+    fn names(&self, py: Python<'_>) -> Vec<String> {
+        self.read(py, |w| w.bodies().map(|(_, b)| b.name.clone()).collect())
+    }
+
+    /// Positions of the bodies' own frames (the position given, moved by the motion), shape
+    /// (n, 3).
+    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |s| s.position.to_array())
+    }
+
+    /// Orientations of the bodies' own frames as quaternions (x, y, z, w), shape (n, 4).
+    fn orientations<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |s| s.rotation.to_array())
+    }
+
+    /// Velocities of the centres of mass, shape (n, 3).
+    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |s| s.velocity.to_array())
+    }
+
+    /// Angular velocities (world), shape (n, 3).
+    fn angular_velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |s| s.omega.to_array())
+    }
+
+    /// Centres of mass (world), shape (n, 3).
+    fn centres_of_mass<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |s| s.com.to_array())
+    }
+
+    /// Every body's state in one call, shape (n, 16): position (3), quaternion x, y, z, w
+    /// (4), velocity (3), angular velocity (3), centre of mass (3) — the columns of `impulse
+    /// run --out` after `time, body`.
+    fn states<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |s| {
+            let mut r = [0.0; 16];
+            r[0..3].copy_from_slice(&s.position.to_array());
+            r[3..7].copy_from_slice(&s.rotation.to_array());
+            r[7..10].copy_from_slice(&s.velocity.to_array());
+            r[10..13].copy_from_slice(&s.omega.to_array());
+            r[13..16].copy_from_slice(&s.com.to_array());
+            r
+        })
+    }
+
+    /// Total kinetic energy of the dynamic bodies and multibodies.
+    fn kinetic_energy(&self, py: Python<'_>) -> f64 {
+        self.read(py, |w| w.kinetic_energy())
+    }
+
+    /// Sets the pose of body `name`: `position` (3,), `rotation` quaternion (x, y, z, w).
+    fn set_pose(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        position: Vector<'_>,
+        rotation: Vector<'_>,
+    ) -> PyResult<()> {
+        let p = DVec3::from_array(vec3("position", &position)?);
+        let q = finite_vector("rotation", &rotation, Some(4))?;
+        let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3]);
+        self.long(py, |w| w.set_pose(Self::handle(w, name)?, p, q))
+    }
+
+    /// Sets the velocity of body `name`'s centre of mass and its angular velocity (3,) each.
+    fn set_velocity(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        velocity: Vector<'_>,
+        angular_velocity: Vector<'_>,
+    ) -> PyResult<()> {
+        let v = DVec3::from_array(vec3("velocity", &velocity)?);
+        let w_ = DVec3::from_array(vec3("angular_velocity", &angular_velocity)?);
+        self.long(py, |w| w.set_velocity(Self::handle(w, name)?, v, w_))
+    }
+
+    /// Applies an impulse (3,) at a world point (3,) to body `name`.
+    fn apply_impulse(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        impulse: Vector<'_>,
+        point: Vector<'_>,
+    ) -> PyResult<()> {
+        let j = DVec3::from_array(vec3("impulse", &impulse)?);
+        let p = DVec3::from_array(vec3("point", &point)?);
+        self.long(py, |w| w.apply_impulse(Self::handle(w, name)?, j, p))
+    }
+
+    /// A constant force (3,) through body `name`'s centre of mass, kept until changed.
+    fn set_force(&self, py: Python<'_>, name: &str, force: Vector<'_>) -> PyResult<()> {
+        let f = DVec3::from_array(vec3("force", &force)?);
+        self.long(py, |w| w.set_load(Self::handle(w, name)?, Load::force(f)))
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let (n, t) = self.read(py, |w| (w.len(), w.time()));
+        format!("World({n} bodies, t = {t})")
+    }
+}
+
+/// Adds this module's names to the extension module.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Shape>()?;
+    m.add_class::<PyWorld>()?;
+    Ok(())
+}

@@ -1,0 +1,95 @@
+"""Pose studies (thesis §7.5) from Python: shards and merge against `impulse poses`, byte for
+byte, and a study spread over a Dask LocalCluster of two workers."""
+
+import json
+
+import numpy as np
+import pytest
+
+import impulse
+
+DROPS, SEED = 40, 5
+
+
+@pytest.fixture(scope="module")
+def part(root):
+    return impulse.PosePart.from_file(root / "fixtures/parts/box-1x2x3.ron")
+
+
+@pytest.fixture(scope="module")
+def cli_study(cli, root, tmp_path_factory):
+    """The file `impulse poses` writes for the study, run in one process."""
+    out = tmp_path_factory.mktemp("poses") / "poses.json"
+    cli("poses", root / "fixtures/parts/box-1x2x3.ron", "--drops", DROPS, "--seed", SEED,
+        "--out", out)
+    return out.read_text()
+
+
+def test_one_process_equals_impulse_poses_byte_for_byte(part, cli_study):
+    text = impulse.run_pose_shard(part, DROPS, seed=SEED, threads=2)
+    assert text == cli_study
+    study = json.loads(text)
+    assert [o["index"] for o in study["outcomes"]] == list(range(DROPS))
+
+
+def test_shards_merged_equal_the_whole_study(part, cli_study, cli, tmp_path):
+    shards = [impulse.run_pose_shard(part, DROPS, seed=SEED, shard=(k, 3), threads=1)
+              for k in range(3)]
+    # Each shard's text is the CLI's `--shard K/3 --out` file.
+    out = tmp_path / "shard1.json"
+    cli("poses", "fixtures/parts/box-1x2x3.ron", "--drops", DROPS, "--seed", SEED,
+        "--shard", "1/3", "--out", out)
+    assert shards[1] == out.read_text()
+    assert [o["index"] for o in json.loads(shards[1])["outcomes"]] == list(range(1, DROPS, 3))
+    assert impulse.merge_pose_studies(shards[::-1]) == cli_study
+
+
+def test_the_summary_counts_every_drop(part, cli_study):
+    s = impulse.pose_summary(part, cli_study)
+    assert s["drops"] == DROPS and s["uniform_drops"] == DROPS // 2
+    # Each pose's count recounted from the file: uniform drops (no `start`) resting on one of
+    # its facets.
+    outcomes = json.loads(cli_study)["outcomes"]
+    for r in s["rows"]:
+        recount = sum(1 for o in outcomes if "start" not in o and o.get("facet") in r["facets"])
+        assert r["uniform_count"] == recount
+    assert sum(r["uniform_count"] for r in s["rows"]) > 0
+    # The quasi-static estimates of the 1 × 2 × 3 box (thesis Table 7.5's part): 64.50 %,
+    # 24.27 %, 11.23 % on the 2 × 3, 1 × 3 and 1 × 2 faces.
+    qs = sorted((r["quasi_static"] for r in s["rows"]), reverse=True)
+    np.testing.assert_allclose(qs, [0.6450, 0.2427, 0.1123], atol=5e-5)
+    # The uniform drops' shares are counts over the uniform drops classified.
+    for r in s["rows"]:
+        assert r["interval"][0] <= r["uniform"] <= r["interval"][1]
+
+
+def test_a_part_from_a_numpy_hull_pickles_and_runs(tmp_path):
+    import pickle
+
+    rng = np.random.default_rng(2)
+    pts = rng.normal(size=(30, 3)) * [0.01, 0.015, 0.02]
+    part = impulse.PosePart.new("pebble", points=pts, density=2500.0)
+    again = pickle.loads(pickle.dumps(part))
+    assert again.name == "pebble" and again.stable_facets() == part.stable_facets()
+    a = impulse.run_pose_shard(part, 6, seed=1, threads=1)
+    assert impulse.run_pose_shard(again, 6, seed=1, threads=1) == a
+
+
+def test_a_dask_cluster_of_two_workers_gives_the_same_file(part, cli_study, tmp_path):
+    from dask import distributed
+
+    from impulse.distributed import pose_study
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        text = pose_study(part, DROPS, shards=4, seed=SEED, client=client,
+                          out=tmp_path / "merged.json")
+        # Each shard ran as its own task, on the cluster's workers.
+        assert len(client.run(lambda: 1)) == 2
+    assert text == cli_study
+    assert (tmp_path / "merged.json").read_text() == cli_study
+    single = impulse.pose_summary(part, impulse.run_pose_shard(part, DROPS, seed=SEED))
+    spread = impulse.pose_summary(part, text)
+    assert [r["uniform_count"] for r in spread["rows"]] == \
+        [r["uniform_count"] for r in single["rows"]]
