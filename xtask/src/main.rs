@@ -23,6 +23,7 @@ mod browser;
 mod cases;
 mod ci;
 mod forks;
+mod fuzz;
 mod layering;
 mod package;
 // Without the `peers` feature the runner is built (so CI checks it) but has no engine to call.
@@ -85,6 +86,10 @@ commands:
                                       screenshots in target/viewer
   layering                            check crate dependencies against the layer table of
                                       docs/architecture.md
+  fuzz --seconds N [--target NAME]    run every cargo-fuzz target of fuzz/ (scene, obj, urdf,
+                                      mechanism, part) for N seconds each, one after another;
+                                      needs the nightly toolchain and cargo-fuzz (not in ci:
+                                      `cargo test` replays fuzz/corpus/ on stable)
   help                                print this message
 ";
 
@@ -97,6 +102,7 @@ enum Command {
     Layering,
     Package,
     Viewer,
+    Fuzz(fuzz::Options),
     Help,
 }
 
@@ -116,6 +122,7 @@ fn main() -> ExitCode {
         Command::Layering => layering::run(),
         Command::Package => package::run(),
         Command::Viewer => viewer::run(),
+        Command::Fuzz(options) => fuzz::run(&options),
         Command::Help => {
             print!("{USAGE}");
             Ok(())
@@ -147,6 +154,7 @@ fn parse_args(args: &[String]) -> Result<Command> {
         "help" | "-h" | "--help" => no_arguments(Command::Help),
         "validate" => parse_validate(rest).map(Command::Validate),
         "bench" => parse_bench(rest).map(Command::Bench),
+        "fuzz" => fuzz::parse(rest).map(Command::Fuzz),
         other => Err(format!("unknown command `{other}`")),
     }
 }
