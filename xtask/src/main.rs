@@ -7,7 +7,8 @@
 //! [`cases`], their references and tolerances, how results are judged, printed and snapshotted in
 //! `fixtures/snapshots/`); the packaging check (`package`: every crate under `crates/` can be
 //! packaged for crates.io); the layering check (`layering`: crate dependencies against the layer
-//! table of `docs/architecture.md`).
+//! table of `docs/architecture.md`); the fuzzing runs (`fuzz`: the cargo-fuzz targets of `fuzz/`
+//! in turn, nightly only; their checks are `fuzz-check`'s).
 //!
 //! **Must not know**: how any quantity is computed. Cases call the public API of the library
 //! crates and compare with independent references; xtask holds no geometry or physics of its

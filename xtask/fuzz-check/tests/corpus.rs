@@ -10,13 +10,14 @@ use fuzz_check::{Outcome, Violation};
 
 type Check = fn(&[u8]) -> Result<Outcome, Violation>;
 
-/// The targets: directory under `fuzz/corpus/` and its check.
-const TARGETS: [(&str, Check); 5] = [
-    ("scene", fuzz_check::check_scene),
-    ("obj", fuzz_check::check_mesh),
-    ("urdf", fuzz_check::check_urdf),
-    ("mechanism", fuzz_check::check_mechanism),
-    ("part", fuzz_check::check_part),
+/// The targets: directory under `fuzz/corpus/`, its check, and the directory of `fixtures/`
+/// its seeds come from.
+const TARGETS: [(&str, Check, &str); 5] = [
+    ("scene", fuzz_check::check_scene, "scenes"),
+    ("obj", fuzz_check::check_mesh, "meshes"),
+    ("urdf", fuzz_check::check_urdf, "urdf"),
+    ("mechanism", fuzz_check::check_mechanism, "mechanisms"),
+    ("part", fuzz_check::check_part, "parts"),
 ];
 
 fn corpus(target: &str) -> Vec<PathBuf> {
@@ -59,7 +60,24 @@ fn replay(target: &str, check: Check) -> Vec<(PathBuf, Outcome)> {
 
 #[test]
 fn every_corpus_file_keeps_the_invariants() {
-    for (target, check) in TARGETS {
-        replay(target, check);
+    let fixtures = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+    for (target, check, seeds) in TARGETS {
+        let mut seeded = 0;
+        for (file, outcome) in replay(target, check) {
+            let name = file.file_name().expect("a file name");
+            let seed = fixtures.join(seeds).join(name);
+            if seed.is_file() && std::fs::read(&seed).ok() == std::fs::read(&file).ok() {
+                seeded += 1;
+                assert!(
+                    matches!(outcome, Outcome::Checked { .. }),
+                    "seed {}: {outcome:?}",
+                    file.display()
+                );
+            }
+        }
+        assert!(
+            seeded > 0,
+            "fuzz/corpus/{target} has no seed from fixtures/{seeds}"
+        );
     }
 }
