@@ -24,7 +24,7 @@
 //!
 //! **Must not know** how the library computes what it checks: energies are computed here from
 //! the state, penetration is read by the monitor (its own sweep and exact distances), the
-//! principal moments by a closed form of this crate's own.
+//! principal moments by Jacobi rotations of this crate's own.
 #![forbid(unsafe_code)]
 
 pub mod energy;
@@ -187,7 +187,7 @@ mod tests {
     use super::*;
     use glam::{DMat3, DQuat, DVec3};
 
-    /// The closed form gives the moments of a rotated diagonal tensor back (the reference is
+    /// The Jacobi rotations give the moments of a rotated diagonal tensor back (the reference is
     /// the diagonal itself).
     #[test]
     fn eigenvalues_of_a_rotated_diagonal() {
