@@ -7,7 +7,8 @@
 //! [`cases`], their references and tolerances, how results are judged, printed and snapshotted in
 //! `fixtures/snapshots/`); the packaging check (`package`: every crate under `crates/` can be
 //! packaged for crates.io); the layering check (`layering`: crate dependencies against the layer
-//! table of `docs/architecture.md`).
+//! table of `docs/architecture.md`); the fuzzing runs (`fuzz`: the cargo-fuzz targets of `fuzz/`
+//! in turn, nightly only; their checks are `fuzz-check`'s).
 //!
 //! **Must not know**: how any quantity is computed. Cases call the public API of the library
 //! crates and compare with independent references; xtask holds no geometry or physics of its
@@ -24,6 +25,7 @@ mod browser;
 mod cases;
 mod ci;
 mod forks;
+mod fuzz;
 mod layering;
 mod package;
 // Without the `peers` feature the runner is built (so CI checks it) but has no engine to call.
@@ -91,6 +93,10 @@ commands:
                                       screenshots in target/viewer
   layering                            check crate dependencies against the layer table of
                                       docs/architecture.md
+  fuzz --seconds N [--target NAME]    run every cargo-fuzz target of fuzz/ (scene, obj, urdf,
+                                      mechanism, part) for N seconds each, one after another;
+                                      needs the nightly toolchain and cargo-fuzz (not in ci:
+                                      `cargo test` replays fuzz/corpus/ on stable)
   help                                print this message
 ";
 
@@ -104,6 +110,7 @@ enum Command {
     Package,
     Python,
     Viewer,
+    Fuzz(fuzz::Options),
     Help,
 }
 
@@ -124,6 +131,7 @@ fn main() -> ExitCode {
         Command::Package => package::run(),
         Command::Python => python::run(),
         Command::Viewer => viewer::run(),
+        Command::Fuzz(options) => fuzz::run(&options),
         Command::Help => {
             print!("{USAGE}");
             Ok(())
@@ -156,6 +164,7 @@ fn parse_args(args: &[String]) -> Result<Command> {
         "help" | "-h" | "--help" => no_arguments(Command::Help),
         "validate" => parse_validate(rest).map(Command::Validate),
         "bench" => parse_bench(rest).map(Command::Bench),
+        "fuzz" => fuzz::parse(rest).map(Command::Fuzz),
         other => Err(format!("unknown command `{other}`")),
     }
 }

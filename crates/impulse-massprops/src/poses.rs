@@ -312,22 +312,26 @@ fn diameter(points: &[DVec3]) -> f64 {
     (hi - lo).length()
 }
 
-/// The solid angle of a convex planar polygon seen from `eye`, over 4π (eq. 7.1 for a
-/// spherical polygon: spherical excess Σβ_k − (n − 2)π).
+/// The solid angle of a convex planar polygon seen from `eye`, over 4π (eq. 7.1), summed over
+/// a fan of triangles by Van Oosterom and Strackee's formula (IEEE Trans. Biomed. Eng. 30,
+/// 1983): tan(Ω/2) = |a·(b × c)| / (1 + a·b + a·c + b·c) for unit vectors a, b, c toward a
+/// triangle's corners. The spherical excess Σβ_k − (n − 2)π computed from the polygon's
+/// angles loses every digit on a facet that is small or seen edge-on from the centre of mass
+/// (its tangents at a corner are differences of nearly equal directions): on a 1.8 km spike
+/// of a 1 cm pebble, found by the part fuzz target, the shares of a part summed to 0.99987.
 fn solid_angle_fraction(corners: &[DVec3], eye: DVec3) -> f64 {
-    let n = corners.len();
     let dirs: Vec<DVec3> = corners.iter().map(|&c| (c - eye).normalize()).collect();
-    let mut excess = -((n as f64) - 2.0) * std::f64::consts::PI;
-    for k in 0..n {
-        let a = dirs[k];
-        let prev = dirs[(k + n - 1) % n];
-        let next = dirs[(k + 1) % n];
-        // Tangents at a of the great-circle arcs toward the neighbours.
-        let t1 = prev - prev.dot(a) * a;
-        let t2 = next - next.dot(a) * a;
-        excess += t1.cross(t2).length().atan2(t1.dot(t2));
-    }
-    excess / (4.0 * std::f64::consts::PI)
+    let a = dirs[0];
+    let omega: f64 = dirs[1..]
+        .windows(2)
+        .map(|w| {
+            let (b, c) = (w[0], w[1]);
+            let num = a.dot(b.cross(c)).abs();
+            let den = 1.0 + a.dot(b) + a.dot(c) + b.dot(c);
+            2.0 * num.atan2(den)
+        })
+        .sum();
+    omega / (4.0 * std::f64::consts::PI)
 }
 
 /// Outward unit normal, in the polygon's plane, of edge k (corner k to k + 1) of a polygon

@@ -130,9 +130,9 @@ impl World {
 
     /// Resolves a contact of pair `(i, j)`, at least one a link, at `x` with normal `n` (from
     /// j toward i) and separation `d`; returns whether an impulse was applied. A response that
-    /// fails is reported as a contact failure and applies nothing (the pair is checked again),
-    /// except for two links of one multibody, which then get a frictionless impulse along the
-    /// normal (the rigid bodies' fallback, [`ContactKind::Fallback`], also reported).
+    /// fails is retried without friction, the rigid bodies' fallback ([`ContactKind::Fallback`],
+    /// reported as a contact failure); only when that fails too is nothing applied (reported,
+    /// and the pair is checked again).
     pub(super) fn resolve_link(&mut self, (i, j): (u32, u32), x: DVec3, n: DVec3, d: f64) -> bool {
         let (eps, gravity) = (self.collision_epsilon(), self.gravity);
         let g = gravity.length();
@@ -180,19 +180,26 @@ impl World {
                     Err(e) => e.to_string(),
                     Ok(_) => "the impulse is not finite".to_string(),
                 };
-                // Two links of one tree: the world's fallback for rigid bodies, a frictionless
-                // impulse along the normal (restitution 1 for a microcollision, eq. 3.18, as
-                // the reversing impulse would). The chapter-3 integrator can fail with
-                // friction on the rank-deficient K of two links few joints apart (sticking
-                // unstable and no diverging ray, Theorem 16 needs K positive definite).
+                // The world's fallback for rigid bodies, a frictionless impulse along the
+                // normal (restitution 1 for a microcollision, eq. 3.18, as the reversing
+                // impulse would). The chapter-3 integrator can fail with friction on a
+                // rank-deficient K (sticking unstable and no diverging ray: Theorem 16 needs K
+                // positive definite): two links of one tree few joints apart, and also one
+                // link of a chain against a fixed body (a point of a three-link pendulum's
+                // middle link has fewer than three directions of motion). Without it, such a
+                // link sank through the floor unresolved (found by the scene fuzz target).
                 let plain = Law {
                     friction: 0.0,
                     restitution: if micro { 1.0 } else { mat.restitution },
                     micro: None,
                     ..law
                 };
-                match one_tree.map(|(m, links)| self.resolve_self(m, links, x, n, &plain)) {
-                    Some(Ok((c, outcome))) if c.impulse_world().is_finite() => {
+                let retry = match one_tree {
+                    Some((m, links)) => self.resolve_self(m, links, x, n, &plain),
+                    None => self.resolve_sides((i, j), x, n, &plain),
+                };
+                match retry {
+                    Ok((c, outcome)) if c.impulse_world().is_finite() => {
                         fallback = Some(why);
                         (c, outcome)
                     }
