@@ -77,6 +77,35 @@ fn pivot_time(omega0: f64, theta1: f64) -> f64 {
     sum * h / 3.0
 }
 
+/// Steps `world` by 0.1 ms until `body` has tilted past 10°, 25° and 40° ([`tilt`]), and
+/// checks each crossing time (interpolated within its step) against the rigid pivot's
+/// ([`pivot_time`] from `omega0`) to `rel_tol`; returns the microcollisions counted.
+fn check_pivot_times(world: &mut World, body: crate::BodyHandle, omega0: f64, rel_tol: f64) -> u64 {
+    let (mut last_t, mut last_tilt, mut micro) = (0.0, 0.0, 0);
+    let dt = 1e-4;
+    for degrees in [10.0_f64, 25.0, 40.0] {
+        let target = degrees.to_radians();
+        let crossed = loop {
+            let t = last_t + dt;
+            let report = world.step_until(t).expect("runs");
+            micro += report.counters.microcollisions;
+            let now = tilt(world.state(body).expect("live").rotation);
+            if now >= target {
+                break last_t + (target - last_tilt) / (now - last_tilt) * dt;
+            }
+            assert!(t < 1.0, "the box did not tip past {degrees}°");
+            (last_t, last_tilt) = (t, now);
+        };
+        let expected = pivot_time(omega0, target);
+        let rel = (crossed - expected).abs() / expected;
+        assert!(
+            rel < rel_tol,
+            "{degrees}°: at {crossed} s, rigid pivot {expected} s ({rel:.2e})"
+        );
+    }
+    micro
+}
+
 /// A box tipped over its edge (the bundled dominos' first domino) passes 10°, 25° and 40°
 /// at the times a rigid pivot gives, and turns at 40° at the rate it gives, within 0.1 %
 /// (the island step holds its load with the arms at mid-step, second order: with the arms at
@@ -91,31 +120,8 @@ fn a_box_tipping_over_its_edge_stays_held_and_follows_the_rigid_pivot() {
     let mut world = World::from_scene(&Scene::new(desc, ".")).expect("a valid scene");
     world.set_checking(true);
     let box_ = world.handle("box").expect("named");
-    let mut last_t = 0.0;
-    let mut last_tilt = 0.0;
-    let mut micro = 0;
-    let dt = 1e-4;
+    let micro = check_pivot_times(&mut world, box_, omega0, 1e-3);
     let last = 40.0_f64;
-    for degrees in [10.0_f64, 25.0, last] {
-        let target = degrees.to_radians();
-        let crossed = loop {
-            let t = last_t + dt;
-            let report = world.step_until(t).expect("runs");
-            micro += report.counters.microcollisions;
-            let now = tilt(world.state(box_).expect("live").rotation);
-            if now >= target {
-                break last_t + (target - last_tilt) / (now - last_tilt) * dt;
-            }
-            assert!(t < 1.0, "the box did not tip past {degrees}°");
-            (last_t, last_tilt) = (t, now);
-        };
-        let expected = pivot_time(omega0, target);
-        let rel = (crossed - expected).abs() / expected;
-        assert!(
-            rel < 1e-3,
-            "{degrees}°: at {crossed} s, rigid pivot {expected} s ({rel:.2e})"
-        );
-    }
     let state = world.state(box_).expect("live");
     let (rate, expected) = (
         state.omega.length(),
@@ -506,27 +512,7 @@ fn a_box_link_tipping_over_its_edge_follows_the_rigid_pivot() {
         )
         .unwrap();
     let body = world.link_body(h, "box").unwrap();
-    let (mut last_t, mut last_tilt) = (0.0, 0.0);
-    let dt = 1e-4;
-    for degrees in [10.0_f64, 25.0, 40.0] {
-        let target = degrees.to_radians();
-        let crossed = loop {
-            let t = last_t + dt;
-            world.step_until(t).expect("runs");
-            let now = tilt(world.state(body).expect("live").rotation);
-            if now >= target {
-                break last_t + (target - last_tilt) / (now - last_tilt) * dt;
-            }
-            assert!(t < 1.0, "the box did not tip past {degrees}°");
-            (last_t, last_tilt) = (t, now);
-        };
-        let expected = pivot_time(omega0, target);
-        let rel = (crossed - expected).abs() / expected;
-        assert!(
-            rel < LINK_PIVOT_REL,
-            "{degrees}°: at {crossed} s, rigid pivot {expected} s ({rel:.2e})"
-        );
-    }
+    check_pivot_times(&mut world, body, omega0, LINK_PIVOT_REL);
     let depth = world.checked_penetration().expect("checking").max_depth;
     assert!(depth <= EPS, "penetration {depth}");
 }
