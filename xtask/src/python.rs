@@ -8,7 +8,7 @@
 //!    while they are unchanged it is reused, so only a fresh clone (or changed pins) pays the
 //!    download. A new user runs `cargo xtask ci` and gets it without a step of their own;
 //!    `rm -rf target/py-venv` starts afresh.
-//! 2. **The package**: `maturin develop --release` in `crates/impulse-py` (one release build of
+//! 2. **The package**: `maturin develop` in `crates/impulse-py` (a dev-profile build of
 //!    the extension, into the workspace's `target/`; maturin sets `PYO3_BUILD_EXTENSION_MODULE`).
 //! 3. **The tests**: `python -m pytest crates/impulse-py/tests` with `IMPULSE_CLI` naming the
 //!    `impulse` program (`cargo build -p impulse-cli`, done already by the test step), which
@@ -39,11 +39,11 @@ pub fn run() -> Result<()> {
     let crate_dir = root.join("crates/impulse-py");
     run_step(
         Command::new(bin.join("maturin"))
-            .args(["develop", "--release", "--quiet"])
+            .args(["develop", "--quiet"])
             .env("VIRTUAL_ENV", &venv)
             .env("PATH", path_with(&bin))
             .current_dir(&crate_dir),
-        "maturin develop --release (crates/impulse-py)",
+        "maturin develop (crates/impulse-py)",
     )?;
     run_step(
         Command::new(cargo())
