@@ -27,7 +27,9 @@ pub struct Profile {
     pub control: Duration,
     /// Everything else in the loop (load functions, the checking monitor, bookkeeping).
     pub other: Duration,
-    /// The whole of the loop's steps.
+    /// The whole of the loop's steps, and the bringing of every body to the requested time
+    /// at the end of each [`World::step_until`] (timed as `rigid_bodies`): every part is
+    /// inside it.
     pub total: Duration,
 }
 

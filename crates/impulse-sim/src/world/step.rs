@@ -76,9 +76,11 @@ impl World {
                 w.loop_step(t)?;
             }
             // Every body at the time the program sees (`sync.rs`).
+            // Charged to the total as well: the shares of `--profile` are of the total.
             let moving = w.tick();
             w.sync_all()?;
             w.charge(Part::Rigid, moving);
+            w.charge_total(moving);
             Ok(())
         };
         if let Err(e) = run(self) {

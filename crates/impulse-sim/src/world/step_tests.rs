@@ -159,3 +159,30 @@ fn a_small_world_on_its_own_pool_stays_on_the_calling_thread() {
         assert_eq!(bits(a.omega), bits(b.omega), "{}", a.name);
     }
 }
+
+/// `--profile`'s shares are of a total that holds every timed part: the bodies brought to
+/// the requested time at the end of each `step_until` (a tumbling brick alone in space,
+/// polled at 10 kHz: nothing but that bringing happens) are in the total too. Before, that
+/// part was timed but left out of the total, and a bullet scene printed "rigid bodies
+/// 787.6 %".
+#[test]
+fn profile_parts_fit_in_the_total() {
+    let mut world = World::new(WorldSettings::new(1e-4)).expect("valid settings");
+    world
+        .add_body(
+            &BodyDesc::new("brick", ShapeDesc::cuboid([0.03, 0.02, 0.01]))
+                .with_angular_velocity([300.0, 20.0, 5.0]),
+        )
+        .expect("free space");
+    world.set_profiling(true);
+    for k in 1..=200 {
+        world.step_until(f64::from(k) * 1e-4).expect("runs");
+    }
+    let p = world.profile().expect("profiling is on");
+    assert!(p.rigid_bodies > std::time::Duration::ZERO, "nothing timed");
+    let timed =
+        p.multibody_dynamics + p.rigid_bodies + p.detection + p.response + p.islands + p.control;
+    assert!(timed <= p.total, "timed {timed:?} > total {:?}", p.total);
+    let sum: f64 = p.shares().iter().map(|(_, s)| s).sum();
+    assert!((sum - 1.0).abs() < 1e-9, "shares sum to {sum}");
+}
