@@ -807,7 +807,6 @@ mod tests {
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(7);
         let tight = Integrator {
             rotation_tolerance: 1e-14,
-            ..Integrator::default()
         };
         let unit = |rng: &mut rand::rngs::Xoshiro256PlusPlus| {
             DVec3::new(
