@@ -383,7 +383,7 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
             s,
             "contact model:    switching: {} island steps, {} impulsive island solves, {} islands put to sleep\n\
              island steps:     {} long (at rest or steady), {} short for turning, {} after strikes, {} cut to fit the envelope, {} cut to a slip → stick transition; {} transitions taken at the step's end\n\
-             contact solver:   {} solves, {} sweeps, {} stopped unconverged at the sweep cap, {} direct solves accepted",
+             contact solver:   {} solves, {} sweeps, {} stopped unconverged at the sweep cap, {} patch jumps, {} direct solves accepted",
             c.island_steps,
             c.transients,
             c.sleeps,
@@ -396,6 +396,7 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
             c.island_solves,
             c.island_sweeps,
             c.unconverged_solves,
+            c.patch_jumps,
             c.direct_solves
         ),
         ContactMode::Impulse => writeln!(s, "contact model:    impulse"),

@@ -33,6 +33,15 @@
 //! It stops when no impulse update changed a contact velocity by more than
 //! [`SolverSettings::tolerance`], or after [`SolverSettings::max_iterations`] sweeps.
 //!
+//! **Jumps** ([`SolverSettings::direct_after`]): after that many sweeps without convergence,
+//! one jump toward the solution: the patch jump (`patch.rs`) solves every patch of three or
+//! more sticking contacts between two bodies as one wrench about its centre — six unknowns
+//! for six relative degrees of freedom, where its corners have twelve and a near-null space —
+//! with every contact sticking, and spreads each wrench over its corners by least norm; it
+//! carries a stack's load through all its patches at once, where a sweep carries it one
+//! patch further. An island it cannot take gets the direct solve on the active set
+//! (`direct.rs`). Either only moves the iterate; the sweeps that follow enforce the laws.
+//!
 //! **Acceleration** (`anderson.rs`, [`SolverSettings::acceleration`]): between sweeps, the
 //! last few iterates' residuals propose an impulse vector their linear model says is nearer
 //! the fixed point; it is projected onto the cones and the velocities rebuilt from it, and the
@@ -74,6 +83,9 @@ use crate::{Body, ContactFrame, ResponseError, collision_matrix_world};
 
 mod anderson;
 mod direct;
+mod patch;
+#[cfg(test)]
+mod patch_tests;
 mod system;
 #[cfg(test)]
 mod system_tests;
@@ -82,6 +94,10 @@ mod tests;
 
 pub use anderson::{MIXING_RIDGE, PROGRESS, STALL_SWEEPS_PER_MEMORY};
 pub use direct::{DENSE_UP_TO, LAW_SLACK, MAX_ROUNDS, REGULARISATION};
+pub use patch::{
+    JUMP_DIVERGED, MIN_PATCHES as PATCH_MIN, PATCH_MAX_UNKNOWNS, PATCH_SPREAD_REL,
+    STICK_MARGIN as PATCH_STICK_MARGIN,
+};
 use system::{LinkRows, Membership};
 pub use system::{Member, System};
 
@@ -139,10 +155,12 @@ pub struct SolverSettings {
     /// Convergence tolerance, a speed (length/time): the solve stops when a whole sweep
     /// changed no contact velocity by more than this (default 1e-9 m/s).
     pub tolerance: f64,
-    /// After this many sweeps without convergence, one direct solve on the active set the
-    /// sweeps found (`direct.rs`: tall stacks), then sweeps again (once per solve: a failed
-    /// attempt costs up to 2·[`MAX_ROUNDS`] factorisations). `None` (the default): sweeps
-    /// only.
+    /// After this many sweeps without convergence, one jump toward the solution, then
+    /// sweeps again (once per solve): the patch jump (`patch.rs`: the island's patches of
+    /// three or more sticking contacts between two bodies, each solved as one wrench, all at
+    /// once; tilted stacks) when the island has [`PATCH_MIN`] patches or more, else a direct
+    /// solve on the active set the sweeps found (`direct.rs`: tall stacks; a failed attempt
+    /// costs up to 2·[`MAX_ROUNDS`] factorisations). `None` (the default): sweeps only.
     pub direct_after: Option<usize>,
     /// Anderson acceleration of the sweeps (`anderson.rs`): how many past iterates mix into
     /// each proposal; 0 for plain sweeps. Not taken for islands with [`System`]s. Default
@@ -186,8 +204,13 @@ pub struct SolveReport {
     pub converged: bool,
     /// Whether a direct solve on the active set was taken ([`SolverSettings::direct_after`]).
     pub direct: bool,
-    /// Whether a direct solve was tried (taken or not).
+    /// Whether a direct solve was tried (taken or not): the patch jump or, when that was not
+    /// taken, the active-set solve.
     pub direct_tried: bool,
+    /// Whether the patch jump (`patch.rs`: every patch of three or more contacts between two
+    /// bodies as one wrench, all sticking) was taken at [`SolverSettings::direct_after`], in
+    /// place of the active-set solve.
+    pub jumped: bool,
 }
 
 /// A contact's precomputed geometry: frame, offsets, collision matrix, and the maps between
@@ -317,6 +340,7 @@ pub fn solve_island(
         converged: contacts.is_empty(),
         direct: false,
         direct_tried: false,
+        jumped: false,
     };
     // Made when acceleration first applies (most solves converge before it does).
     let mut accel: Option<anderson::Accelerated> = None;
@@ -337,7 +361,12 @@ pub fn solve_island(
             && settings.direct_after == Some(report.iterations)
         {
             report.direct_tried = true;
-            report.direct = direct::solve_active_set(bodies, contacts, &rows, settings.tolerance);
+            // The patch jump first (cheap, and it reaches tilted stacks the active-set solve
+            // diverges on); an island it cannot take (no patch, too many unknowns, a jump
+            // that would dwarf the iterate) gets the active-set solve.
+            report.jumped = patch::jump(bodies, contacts, &rows, patch::MIN_PATCHES);
+            report.direct = !report.jumped
+                && direct::solve_active_set(bodies, contacts, &rows, settings.tolerance);
             if let Some(a) = &mut accel {
                 a.restart(contacts);
             }

@@ -646,10 +646,11 @@ fn bad_input_is_refused_and_changes_nothing() {
     }
 }
 
-/// The direct solve on the active set (`direct.rs`) settles tall stacks that sweeps alone
-/// cannot: from a cold start, stacks of 8 and 16 converge to 1e-9 m/s within 200 sweeps
-/// (sweeps alone: not within 200), and so does a stack of 32, every interface carrying the weight above it; the
-/// next step, warm started, takes one sweep.
+/// The direct solve settles tall stacks that sweeps alone cannot: from a cold start, stacks
+/// of 8 and 16 (by the patch jump, `patch.rs`: 48 and 96 unknowns) and of 32 (too many
+/// unknowns for the jump: by the active-set solve, `direct.rs`) converge to 1e-9 m/s within
+/// 200 sweeps (sweeps alone: not within 200), every interface carrying the weight above it;
+/// the next step, warm started, takes one sweep.
 #[test]
 fn direct_solve_settles_tall_stacks() {
     let (m, half) = (1.5, DVec3::new(0.1, 0.075, 0.05));
@@ -674,7 +675,7 @@ fn direct_solve_settles_tall_stacks() {
         }
         let report = solve_contacts(&mut bodies, &mut contacts, &settings).unwrap();
         assert!(
-            report.converged && report.direct && report.direct_tried,
+            report.converged && (report.direct || report.jumped) && report.direct_tried,
             "n = {n}: {report:?}"
         );
         assert_stack_stopped_and_carried(&bodies, &contacts, m, &format!("n {n}"));

@@ -148,6 +148,7 @@ pub(super) struct PlanCounts {
     island_sweeps: u64,
     unconverged_solves: u64,
     direct_solves: u64,
+    patch_jumps: u64,
 }
 
 impl PlanCounts {
@@ -163,6 +164,7 @@ impl PlanCounts {
         c.island_sweeps += self.island_sweeps;
         c.unconverged_solves += self.unconverged_solves;
         c.direct_solves += self.direct_solves;
+        c.patch_jumps += self.patch_jumps;
     }
 }
 
@@ -980,9 +982,11 @@ impl World {
             let report = self.solve(&mut bodies, &mut systems, &mut trial, &solver, counts)?;
             // A direct solve that failed on this island fails again on the same contacts cut
             // to a shorter step: the re-solves that locate a transition go without it.
+            // A patch jump counts as a direct solve that succeeded.
             if report.direct_tried {
-                direct_outcome.get_or_insert(report.direct);
-                if !report.direct {
+                let taken = report.direct || report.jumped;
+                direct_outcome.get_or_insert(taken);
+                if !taken {
                     solver.direct_after = None;
                 }
             }
@@ -1290,6 +1294,7 @@ impl World {
         c.island_sweeps += report.iterations as u64;
         c.unconverged_solves += u64::from(!report.converged);
         c.direct_solves += u64::from(report.direct);
+        c.patch_jumps += u64::from(report.jumped);
         Ok(report)
     }
 

@@ -208,6 +208,10 @@ pub struct Counters {
     pub unconverged_solves: u64,
     /// Direct solves on the sweeps' active set that were accepted.
     pub direct_solves: u64,
+    /// Patch jumps taken in island solves (`impulse_response::SolveReport::jumped`: each
+    /// patch of three or more contacts between two bodies solved as one wrench, all
+    /// sticking, and the sweeps continued from there).
+    pub patch_jumps: u64,
     /// Steps of the multibodies undone and done again because a link's prediction failed
     /// (thesis §5.2: a box or slack violation).
     pub rollbacks: u64,

@@ -480,6 +480,7 @@ fn difference(a: &Counters, b: &Counters) -> Counters {
         island_sweeps: a.island_sweeps - b.island_sweeps,
         unconverged_solves: a.unconverged_solves - b.unconverged_solves,
         direct_solves: a.direct_solves - b.direct_solves,
+        patch_jumps: a.patch_jumps - b.patch_jumps,
         rollbacks: a.rollbacks - b.rollbacks,
         box_violations: a.box_violations - b.box_violations,
         slack_violations: a.slack_violations - b.slack_violations,
