@@ -27,17 +27,7 @@ fn a_box_on_four_corners_shares_its_weight_by_the_lever_rule() {
     let corners = [(-a, -b), (a, -b), (a, b), (-a, b)];
     let mut contacts: Vec<Contact> = corners
         .iter()
-        .map(|&(x, y)| Contact {
-            body1: 0,
-            body2: None,
-            point: DVec3::new(x, y, 0.0),
-            normal: DVec3::Z,
-            friction: 0.5,
-            target_normal_velocity: 0.0,
-            velocity_bias: DVec3::ZERO,
-            lever_arms: None,
-            impulse: DVec3::ZERO,
-        })
+        .map(|&(x, y)| super::tests::contact_at(0, None, DVec3::new(x, y, 0.0), DVec3::Z, 0.5))
         .collect();
     let of = system::membership(&bodies, &[]).unwrap();
     let rows = prepare(&bodies, &[], &of, &contacts, &SolverSettings::default()).unwrap();
