@@ -581,19 +581,19 @@ impl Body {
             self.omega = omega;
             return Ok(q);
         }
-        self.rotate_numerically(dt, integrator, m)
+        self.rotate_numerically(dt, integrator, m, tau)
     }
 
     /// [`Body::rotate`] by the adaptive Runge–Kutta integrator (module documentation), for
-    /// any principal moments and a constant torque.
+    /// any principal moments and the constant torque `tau`.
     fn rotate_numerically(
         &mut self,
         dt: f64,
         integrator: &Integrator,
         m: Mass,
+        tau: DVec3,
     ) -> Result<DQuat, AdvanceError> {
         let q0 = self.pose.rotation;
-        let tau = self.total_torque();
         // World angular momentum: L(t) = L₀ + τ·t exactly (constant without torque).
         let inv = m.moments.recip();
         let l0 = self.inertia_world() * self.omega;
@@ -830,7 +830,9 @@ mod tests {
                 let dt = rng.random_range(1e-4..2e-2);
                 b.advance(dt, DVec3::ZERO, &Integrator::default()).unwrap();
                 let m = numeric.mass.unwrap();
-                let q = numeric.rotate_numerically(dt, &tight, m).unwrap();
+                let q = numeric
+                    .rotate_numerically(dt, &tight, m, DVec3::ZERO)
+                    .unwrap();
                 numeric.pose = Pose::new(q, numeric.pose.translation + numeric.velocity * dt);
                 let l = b.angular_momentum();
                 assert!(

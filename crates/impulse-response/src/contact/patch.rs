@@ -49,11 +49,12 @@ pub const PATCH_SPREAD_REL: f64 = 1e-6;
 
 /// One group of unknowns.
 enum Group {
-    /// Contacts `members` between the same two bodies, one wrench about `centre`, with
-    /// `inverse_spread` A⁻¹.
+    /// Contacts `members` between the same two bodies, one wrench about `centre`, their
+    /// points' offsets `arms` from it (r_k), and `inverse_spread` A⁻¹.
     Patch {
         members: Vec<usize>,
         centre: DVec3,
+        arms: Vec<DVec3>,
         inverse_spread: DMat3,
     },
     /// One contact's impulse (its frame).
@@ -97,8 +98,8 @@ fn groups(bodies: &[IslandBody], contacts: &[Contact], rows: &[Row]) -> Vec<Grou
                 .map(|&k| point_of(bodies, &contacts[k], &rows[k]))
                 .collect();
             let centre = points.iter().copied().sum::<DVec3>() / points.len() as f64;
-            let spread = points.iter().fold(DMat3::ZERO, |a, &x| {
-                let r = x - centre;
+            let arms: Vec<DVec3> = points.iter().map(|&x| x - centre).collect();
+            let spread = arms.iter().fold(DMat3::ZERO, |a, &r| {
                 a + DMat3::from_diagonal(DVec3::splat(r.length_squared()))
                     - DMat3::from_cols(r * r.x, r * r.y, r * r.z)
             });
@@ -107,6 +108,7 @@ fn groups(bodies: &[IslandBody], contacts: &[Contact], rows: &[Row]) -> Vec<Grou
                 out.push(Group::Patch {
                     members,
                     centre,
+                    arms,
                     inverse_spread: spread.inverse(),
                 });
                 continue;
@@ -323,19 +325,21 @@ pub(super) fn jump(
             }
             Group::Patch {
                 members,
-                centre,
+                arms,
                 inverse_spread,
+                ..
             } => {
                 // The rigid twist nearest to the contacts' wishes (least squares about the
                 // centroid: V the mean, Ω = A⁻¹·Σ r × (d − V)).
                 let wish: Vec<(DVec3, DVec3)> = members
                     .iter()
-                    .map(|&k| {
+                    .zip(arms)
+                    .map(|(&k, &r)| {
                         let (c, row) = (&contacts[k], &rows[k]);
                         let d = row
                             .frame
                             .to_world(DVec3::new(0.0, 0.0, c.target_normal_velocity) - row.bias);
-                        (point_of(bodies, c, row) - *centre, d)
+                        (r, d)
                     })
                     .collect();
                 let mean = wish.iter().map(|(_, d)| *d).sum::<DVec3>() / wish.len() as f64;
@@ -366,23 +370,20 @@ pub(super) fn jump(
             }
             Group::Patch {
                 members,
-                centre,
+                arms,
                 inverse_spread,
+                ..
             } => {
-                let arms: Vec<DVec3> = members
-                    .iter()
-                    .map(|&k| point_of(bodies, &contacts[k], &rows[k]) - *centre)
-                    .collect();
                 let mut force = DVec3::new(x(0), x(1), x(2));
                 let mut torque = DVec3::new(x(3), x(4), x(5));
-                for (&k, r) in members.iter().zip(&arms) {
+                for (&k, r) in members.iter().zip(arms) {
                     let p = rows[k].frame.to_world(contacts[k].impulse);
                     force += p;
                     torque += r.cross(p);
                 }
                 let y = *inverse_spread * torque;
                 let n = members.len() as f64;
-                for (&k, r) in members.iter().zip(&arms) {
+                for (&k, r) in members.iter().zip(arms) {
                     let p = force / n + y.cross(*r);
                     new.push((k, rows[k].frame.to_contact(p)));
                 }
