@@ -119,12 +119,15 @@ fn path_with(dir: &Path) -> std::ffi::OsString {
     std::env::join_paths(paths).unwrap_or_else(|_| dir.as_os_str().to_owned())
 }
 
-/// Runs a command with inherited output; `Err` names it (`shown`) and how it failed.
+/// Runs a command with inherited output, then prints its wall time; `Err` names it (`shown`)
+/// and how it failed.
 fn run_step(cmd: &mut Command, shown: &str) -> Result<()> {
     println!("==> {shown}");
+    let start = std::time::Instant::now();
     let status = cmd
         .status()
         .map_err(|e| format!("could not start `{shown}`: {e}"))?;
+    println!("    ({:.1} s)", start.elapsed().as_secs_f64());
     if status.success() {
         Ok(())
     } else {
