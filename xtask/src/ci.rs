@@ -1,6 +1,7 @@
 //! `cargo xtask ci`: every check a CI job runs, in order, stopping at the first failure.
 //!
-//! The steps are: `cargo fmt --all -- --check`; `cargo clippy --workspace --all-targets -- -D
+//! The steps are: `cargo fmt --all -- --check`; `features` (the builds CI makes give every
+//! dependency the same features, so the workspace is compiled once: [`crate::unify`]); `cargo clippy --workspace --all-targets -- -D
 //! warnings`; `cargo test --workspace` (explicitly the whole workspace: the default members
 //! leave out xtask, whose own tests must run too); `python` (the `impulse` Python package built
 //! with maturin into `target/py-venv` and its pytest suite run: [`crate::python`]); `cargo doc --workspace --no-deps` with
@@ -13,7 +14,7 @@
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use crate::{Result, cargo, layering, package, python, validate, viewer, workspace_root};
+use crate::{Result, cargo, layering, package, python, unify, validate, viewer, workspace_root};
 
 /// One step of the sequence.
 enum Step {
@@ -54,6 +55,7 @@ impl Step {
 /// The steps, in the order they run.
 const STEPS: &[Step] = &[
     Step::Cargo(&["fmt", "--all", "--", "--check"]),
+    Step::InProcess("features", unify::run),
     Step::Cargo(&[
         "clippy",
         "--workspace",
@@ -142,6 +144,7 @@ mod tests {
             titles,
             [
                 "cargo fmt --all -- --check",
+                "features",
                 "cargo clippy --workspace --all-targets -- -D warnings",
                 "cargo test --workspace",
                 "python",

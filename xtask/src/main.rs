@@ -14,7 +14,8 @@
 //! crates and compare with independent references; xtask holds no geometry or physics of its
 //! own, and no library crate may learn about validation cases or snapshots.
 //!
-//! Modules: [`ci`] (the step sequence), [`layering`], [`package`], [`python`] (the Python
+//! Modules: [`ci`] (the step sequence), [`layering`], [`unify`] (the builds CI makes share
+//! their dependencies), [`package`], [`python`] (the Python
 //! package's build and tests), [`validate`] (harness,
 //! checks, snapshots), [`cases`] (the registry). Dependencies are kept minimal: insta and serde_json only; the
 //! command line is parsed by hand.
@@ -36,6 +37,7 @@ mod poses;
 mod python;
 mod scale;
 mod stacks;
+mod unify;
 mod validate;
 mod viewer;
 
@@ -50,10 +52,13 @@ const USAGE: &str = "\
 usage: cargo xtask <command>
 
 commands:
-  ci                                  cargo fmt --check, clippy -D warnings, test --workspace,
-                                      python, doc, layering, package, validate, viewer; stops
-                                      at the first failure
-  python                              build the `impulse` Python package (maturin, release)
+  ci                                  cargo fmt --check, features, clippy -D warnings, test
+                                      --workspace, python, doc, layering, package, validate,
+                                      viewer; stops at the first failure
+  features                            check that xtask's and impulse-py's own builds give every
+                                      dependency the features `cargo test --workspace` gives
+                                      it (else CI compiles the workspace twice)
+  python                              build the `impulse` Python package (maturin, dev profile)
                                       into target/py-venv (made from
                                       crates/impulse-py/requirements-ci.txt when absent or
                                       out of date) and run its pytest suite
@@ -107,6 +112,7 @@ enum Command {
     Validate(validate::Options),
     Bench(bench::Options),
     Layering,
+    Features,
     Package,
     Python,
     Viewer,
@@ -128,6 +134,7 @@ fn main() -> ExitCode {
         Command::Validate(options) => validate::run(&options),
         Command::Bench(options) => bench::run_bench(&options),
         Command::Layering => layering::run(),
+        Command::Features => unify::run(),
         Command::Package => package::run(),
         Command::Python => python::run(),
         Command::Viewer => viewer::run(),
@@ -158,6 +165,7 @@ fn parse_args(args: &[String]) -> Result<Command> {
     match command.as_str() {
         "ci" => no_arguments(Command::Ci),
         "layering" => no_arguments(Command::Layering),
+        "features" => no_arguments(Command::Features),
         "package" => no_arguments(Command::Package),
         "python" => no_arguments(Command::Python),
         "viewer" => no_arguments(Command::Viewer),

@@ -11,7 +11,8 @@
 //! 2. **The package**: `maturin develop` in `crates/impulse-py` (a dev-profile build of
 //!    the extension, into the workspace's `target/`; maturin sets `PYO3_BUILD_EXTENSION_MODULE`).
 //! 3. **The tests**: `python -m pytest crates/impulse-py/tests` with `IMPULSE_CLI` naming the
-//!    `impulse` program (`cargo build -p impulse-cli`, done already by the test step), which
+//!    `impulse` program (built by `cargo test --workspace --no-run`, done already by the test
+//!    step: `cargo build -p impulse-cli` would resolve other features and build it again), which
 //!    many tests take as their reference.
 //!
 //! Unix paths (`bin/`); on Windows the environment's programs are under `Scripts/`.
@@ -45,11 +46,14 @@ pub fn run() -> Result<()> {
             .current_dir(&crate_dir),
         "maturin develop (crates/impulse-py)",
     )?;
+    // The `impulse` program as the test step builds it: `cargo build -p impulse-cli` would
+    // resolve the CLI's features alone and compile the workspace again (118 s of a fresh
+    // `cargo xtask ci`); after the test step this is a no-op.
     run_step(
         Command::new(cargo())
-            .args(["build", "--quiet", "-p", "impulse-cli"])
+            .args(["test", "--workspace", "--no-run", "--quiet"])
             .current_dir(&root),
-        "cargo build -p impulse-cli",
+        "cargo test --workspace --no-run (the `impulse` program, as the test step built it)",
     )?;
     let target =
         std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
