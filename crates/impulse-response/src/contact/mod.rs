@@ -34,11 +34,10 @@
 //! [`SolverSettings::tolerance`], or after [`SolverSettings::max_iterations`] sweeps.
 //!
 //! **Jumps** ([`SolverSettings::direct_after`]): after that many sweeps without convergence,
-//! one jump toward the solution: the patch jump (`patch.rs`) solves every patch of sticking
-//! contacts between two bodies as one wrench about its centre — six unknowns for six relative
-//! degrees of freedom, where its corners have twelve and a near-null space (five for the
-//! points of one edge) — with every patch sticking and the sliding contacts outside patches
-//! on their cones' rims, and spreads each wrench over its corners by least norm; it
+//! one jump toward the solution: the patch jump (`patch.rs`) solves every patch of three or
+//! more sticking contacts between two bodies as one wrench about its centre — six unknowns
+//! for six relative degrees of freedom, where its corners have twelve and a near-null space —
+//! with every contact sticking, and spreads each wrench over its corners by least norm; it
 //! carries a stack's load through all its patches at once, where a sweep carries it one
 //! patch further. An island it cannot take gets the direct solve on the active set
 //! (`direct.rs`). Either only moves the iterate; the sweeps that follow enforce the laws.
@@ -158,8 +157,8 @@ pub struct SolverSettings {
     pub tolerance: f64,
     /// After this many sweeps without convergence, one jump toward the solution, then
     /// sweeps again (once per solve): the patch jump (`patch.rs`: the island's patches of
-    /// sticking contacts between two bodies, each solved as one wrench, all at once; tilted
-    /// stacks) when the island has [`PATCH_MIN`] patches or more, else a direct
+    /// three or more sticking contacts between two bodies, each solved as one wrench, all at
+    /// once; tilted stacks) when the island has [`PATCH_MIN`] patches or more, else a direct
     /// solve on the active set the sweeps found (`direct.rs`: tall stacks; a failed attempt
     /// costs up to 2·[`MAX_ROUNDS`] factorisations). `None` (the default): sweeps only.
     pub direct_after: Option<usize>,
@@ -208,8 +207,8 @@ pub struct SolveReport {
     /// Whether a direct solve was tried (taken or not): the patch jump or, when that was not
     /// taken, the active-set solve.
     pub direct_tried: bool,
-    /// Whether the patch jump (`patch.rs`: every patch of sticking contacts between two
-    /// bodies as one wrench) was taken at [`SolverSettings::direct_after`], in
+    /// Whether the patch jump (`patch.rs`: every patch of three or more contacts between two
+    /// bodies as one wrench, all sticking) was taken at [`SolverSettings::direct_after`], in
     /// place of the active-set solve.
     pub jumped: bool,
 }

@@ -1,5 +1,5 @@
-//! A stack-wide jump for islands Gauss–Seidel crosses slowly: every patch of sticking contacts
-//! between two bodies solved as one wrench, all at once.
+//! A stack-wide jump for islands Gauss–Seidel crosses slowly: every patch of three or more
+//! contacts between two bodies solved as one wrench, all at once.
 //!
 //! A tall stack is Gauss–Seidel's worst case: a load travels one contact per sweep, and a
 //! stack of ten boxes, each resting on four corners, took 900 to 11 000 sweeps from its warm
@@ -13,16 +13,11 @@
 //! Here the unknowns are what the bodies can feel. A patch (the contacts between the same two
 //! bodies along the same normal that the iterate has sticking, three or more, not on one
 //! line) gets one wrench (f, τ) about its centre c: six unknowns for six relative degrees of
-//! freedom, no redundancy. Sticking contacts along one line (an edge) are a patch too, with
-//! five unknowns: no torque about the line, which points on it cannot resist. A lone sticking
-//! contact keeps its three. A sliding contact outside a patch has one unknown, its normal
-//! impulse, its friction on the cone's rim in the direction the sweeps gave it; the sliding
-//! contacts beside a patch that spans a plane, and lifting contacts, keep the impulses the
-//! sweeps gave them.
-//! An island needs [`MIN_PATCHES`] patches. The relative motion each patch is asked for is the
+//! freedom, no redundancy; smaller patches (an edge, a point) keep one impulse per contact.
+//! Contacts that slide or lift keep the impulses the sweeps gave them. An island needs
+//! [`MIN_PATCHES`] patches. The relative motion each patch is asked for is the
 //! rigid twist nearest, by least squares, to what its contacts are asked for (u = target
-//! along the normal, no slip, less each contact's velocity bias); a sliding contact is asked
-//! for its target normal speed.
+//! along the normal, no slip, less each contact's velocity bias) — every contact sticking.
 //! The linear system W_P·Δλ = b (W_P the Delassus matrix of the wrenches, dense, small) is
 //! solved once; each patch's new total wrench is spread over its contacts by the least-norm
 //! distribution (p_k = f/n + y × r_k, A·y = τ, A = Σ(|r|²·1 − r·rᵀ), r_k = x_k − c), which
@@ -40,7 +35,7 @@ use crate::body::Body;
 /// factorised dense (O(m³)). Default `120`: a stack of 20 boxes on four corners each.
 pub const PATCH_MAX_UNKNOWNS: usize = 120;
 
-/// Fewest patches spanning a plane an island needs for the jump. Default `2`: the jump is for loads that
+/// Fewest patches an island needs for the jump. Default `2`: the jump is for loads that
 /// cross several patches (a stack), which sweeps carry one patch per sweep; a body resting on
 /// one patch converges by sweeps and the active-set solve (the feeder chute's caps on the
 /// tray took three jumps on one patch, each converged, and those few changes of rounding
@@ -55,23 +50,15 @@ pub const PATCH_SPREAD_REL: f64 = 1e-6;
 /// One group of unknowns.
 enum Group {
     /// Contacts `members` between the same two bodies, one wrench about `centre`, their
-    /// points' offsets `arms` from it (r_k), the torque axes the points can resist about
-    /// (`torque_axes`: all three for points spanning a plane, the two across the line for
-    /// points on one line, which cannot resist a turn about it) and `inverse_spread`, A⁻¹ on
-    /// the span of those axes (zero along the line).
+    /// points' offsets `arms` from it (r_k), and `inverse_spread` A⁻¹.
     Patch {
         members: Vec<usize>,
         centre: DVec3,
         arms: Vec<DVec3>,
-        torque_axes: Vec<DVec3>,
         inverse_spread: DMat3,
     },
     /// One contact's impulse (its frame).
     Lone(usize),
-    /// A contact the iterate has sliding: one unknown, its normal impulse, with its friction
-    /// held on the cone's rim along the direction the iterate gives it, `rim` = (μ·t̂, 1) in
-    /// its frame.
-    Slide(usize, DVec3),
 }
 
 /// Body indices of a contact: (body 1, body 2 if any), and whether each moves.
@@ -92,21 +79,11 @@ fn point_of(bodies: &[IslandBody], c: &Contact, row: &Row) -> DVec3 {
 /// manifold's points share their normal).
 type PatchKey = (usize, Option<usize>, [u64; 3]);
 
-/// Groups the pressing contacts by their two bodies and normal. A group whose sticking
-/// contacts span a plane (three or more, not on one line) is one patch of them; its sliding
-/// contacts keep the impulses the sweeps gave them (as unknowns of their own they asked a
-/// seventh relative motion of six degrees of freedom: measured on stacks of the pile of
-/// 1000, jumps of 10⁸–10²⁴ times the iterate's impulses, refused). A group whose sticking
-/// contacts lie on one line is a patch that resists no turn about the line, and its sliding
-/// contacts, which can hold that turn, are unknowns of their own ([`Group::Slide`]); so are
-/// the sliding contacts of a group with one sticking contact or none.
+/// Groups the contacts that stick: patches of three or more non-collinear contacts between
+/// the same two bodies along the same normal, and lone contacts.
 fn groups(bodies: &[IslandBody], contacts: &[Contact], rows: &[Row]) -> Vec<Group> {
     let mut by_pair: Vec<(PatchKey, Vec<usize>)> = Vec::new();
-    for (k, c) in contacts
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| c.impulse.z > 0.0)
-    {
+    for (k, c) in contacts.iter().enumerate().filter(|(_, c)| sticks(c)) {
         let key = (c.body1, c.body2, c.normal.to_array().map(f64::to_bits));
         match by_pair.iter_mut().find(|(p, _)| *p == key) {
             Some((_, v)) => v.push(k),
@@ -114,10 +91,8 @@ fn groups(bodies: &[IslandBody], contacts: &[Contact], rows: &[Row]) -> Vec<Grou
         }
     }
     let mut out = Vec::new();
-    for (_, pressing) in by_pair {
-        let (stickers, sliders): (Vec<usize>, Vec<usize>) =
-            pressing.iter().partition(|&&k| sticks(&contacts[k]));
-        let spread_of = |members: &[usize]| {
+    for (_, members) in by_pair {
+        if members.len() >= 3 {
             let points: Vec<DVec3> = members
                 .iter()
                 .map(|&k| point_of(bodies, &contacts[k], &rows[k]))
@@ -128,82 +103,20 @@ fn groups(bodies: &[IslandBody], contacts: &[Contact], rows: &[Row]) -> Vec<Grou
                 a + DMat3::from_diagonal(DVec3::splat(r.length_squared()))
                     - DMat3::from_cols(r * r.x, r * r.y, r * r.z)
             });
-            (centre, arms, spread)
-        };
-        let mut line = None;
-        if stickers.len() >= 2 {
-            let (_, _, spread) = spread_of(&stickers);
             let trace = spread.x_axis.x + spread.y_axis.y + spread.z_axis.z;
-            if trace > 0.0 && smallest_eigenvalue(spread) > PATCH_SPREAD_REL * trace {
-                let (centre, arms, spread) = spread_of(&stickers);
+            if smallest_eigenvalue(spread) > PATCH_SPREAD_REL * trace && trace > 0.0 {
                 out.push(Group::Patch {
-                    members: stickers,
+                    members,
                     centre,
                     arms,
-                    torque_axes: DVec3::AXES.to_vec(),
                     inverse_spread: spread.inverse(),
                 });
                 continue;
             }
-            line = line_patch(spread_of(&stickers), trace).map(|(centre, arms, axes, inv)| {
-                Group::Patch {
-                    members: stickers.clone(),
-                    centre,
-                    arms,
-                    torque_axes: axes,
-                    inverse_spread: inv,
-                }
-            });
         }
-        match line {
-            Some(patch) => out.push(patch),
-            None => out.extend(stickers.iter().map(|&k| Group::Lone(k))),
-        }
-        for k in sliders {
-            let c = &contacts[k];
-            let tangent = c.impulse.truncate();
-            if tangent.length() > 0.0 {
-                let t = tangent.normalize() * c.friction;
-                out.push(Group::Slide(k, DVec3::new(t.x, t.y, 1.0)));
-            }
-        }
+        out.extend(members.into_iter().map(Group::Lone));
     }
     out
-}
-
-/// Centre, arms, torque axes and inverse spread of a patch whose points lie on one line
-/// (two points of an edge, or more along it), from its centre, arms and spread A; `trace`
-/// is A's. The longest arm gives the line's direction d; the wrench's torque is taken across
-/// it only, and A is inverted on the plane across d. As lone contacts, two points of one
-/// edge carry six unknowns for the five relative degrees of freedom they can hold, and the
-/// sixth direction (both pushing along the line against each other) made the system
-/// singular (measured on stacks of the pile of 1000 with an edge sticking: jumps of
-/// 10⁷–10¹⁰ times the iterate's impulses). `None` when the points coincide.
-fn line_patch(
-    (centre, arms, spread): (DVec3, Vec<DVec3>, DMat3),
-    trace: f64,
-) -> Option<(DVec3, Vec<DVec3>, Vec<DVec3>, DMat3)> {
-    let longest = arms
-        .iter()
-        .copied()
-        .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))?;
-    if !(trace > 0.0 && longest.length_squared() > 0.0) {
-        return None;
-    }
-    let d = longest.normalize();
-    let e1 = d.any_orthonormal_vector();
-    let e2 = d.cross(e1);
-    let m = |a: DVec3, b: DVec3| a.dot(spread * b);
-    let (m11, m12, m22) = (m(e1, e1), m(e1, e2), m(e2, e2));
-    let det = m11 * m22 - m12 * m12;
-    if det <= PATCH_SPREAD_REL * trace * trace {
-        return None;
-    }
-    // E·M⁻¹·Eᵀ with E = [e1 e2]: A's inverse across the line.
-    let (i11, i12, i22) = (m22 / det, -m12 / det, m11 / det);
-    let outer = |a: DVec3, b: DVec3| DMat3::from_cols(a * b.x, a * b.y, a * b.z);
-    let inverse = outer(e1, e1) * i11 + (outer(e1, e2) + outer(e2, e1)) * i12 + outer(e2, e2) * i22;
-    Some((centre, arms, vec![e1, e2], inverse))
 }
 
 /// Whether the iterate has a contact pressing and sticking strictly inside its cone: only
@@ -245,43 +158,26 @@ type Push = Vec<(usize, DVec3, DVec3)>;
 fn pushes(bodies: &[IslandBody], contacts: &[Contact], rows: &[Row], g: &Group) -> Vec<Push> {
     match g {
         Group::Patch {
-            members,
-            centre,
-            torque_axes,
-            ..
+            members, centre, ..
         } => {
             let c = &contacts[members[0]];
-            (0..3 + torque_axes.len())
+            (0..6)
                 .map(|q| {
+                    let unit = DVec3::AXES[q % 3];
                     ends(bodies, c)
                         .into_iter()
                         .filter_map(|(b, sign)| b.map(|b| (b, sign)))
                         .map(|(b, sign)| {
                             if q < 3 {
-                                let unit = DVec3::AXES[q];
                                 let arm = *centre - bodies[b].com;
                                 (b, unit * sign, arm.cross(unit) * sign)
                             } else {
-                                (b, DVec3::ZERO, torque_axes[q - 3] * sign)
+                                (b, DVec3::ZERO, unit * sign)
                             }
                         })
                         .collect()
                 })
                 .collect()
-        }
-        Group::Slide(k, rim) => {
-            let (c, row) = (&contacts[*k], &rows[*k]);
-            let unit = row.frame.to_world(*rim);
-            vec![
-                ends(bodies, c)
-                    .into_iter()
-                    .filter_map(|(b, sign)| b.map(|b| (b, sign)))
-                    .map(|(b, sign)| {
-                        let arm = if b == c.body1 { row.r1 } else { row.r2 };
-                        (b, unit * sign, arm.cross(unit) * sign)
-                    })
-                    .collect(),
-            ]
         }
         Group::Lone(k) => {
             let (c, row) = (&contacts[*k], &rows[*k]);
@@ -315,10 +211,7 @@ fn measure(
     let side = |b: Option<usize>| b.map_or((DVec3::ZERO, DVec3::ZERO), v);
     match g {
         Group::Patch {
-            members,
-            centre,
-            torque_axes,
-            ..
+            members, centre, ..
         } => {
             let c = &contacts[members[0]];
             let [(b1, _), (b2, _)] = ends(bodies, c);
@@ -329,22 +222,15 @@ fn measure(
             };
             let ((l1, a1), (l2, a2)) = (at(b1), at(b2));
             let (lin, ang) = (l1 - l2, a1 - a2);
-            let mut out = vec![lin.x, lin.y, lin.z];
-            out.extend(torque_axes.iter().map(|e| ang.dot(*e)));
-            out
+            vec![lin.x, lin.y, lin.z, ang.x, ang.y, ang.z]
         }
-        Group::Lone(k) | Group::Slide(k, _) => {
+        Group::Lone(k) => {
             let (c, row) = (&contacts[*k], &rows[*k]);
             let [(b1, _), (b2, _)] = ends(bodies, c);
             let (l1, a1) = side(b1);
             let (l2, a2) = side(b2);
-            let u = row
-                .frame
-                .to_contact((l1 + a1.cross(row.r1)) - (l2 + a2.cross(row.r2)));
-            match g {
-                Group::Slide(..) => vec![u.z],
-                _ => u.to_array().to_vec(),
-            }
+            let u = (l1 + a1.cross(row.r1)) - (l2 + a2.cross(row.r2));
+            row.frame.to_contact(u).to_array().to_vec()
         }
     }
 }
@@ -361,12 +247,9 @@ pub(super) fn jump(
     min_patches: usize,
 ) -> bool {
     let groups = groups(bodies, contacts, rows);
-    // Patches that span a plane: an island of edges only (leaning dominos) is left to the
-    // active-set solve, which did better there (measured on the dominos: with edges
-    // counted, 4 jumps and 21 % more sweeps).
     let patches = groups
         .iter()
-        .filter(|g| matches!(g, Group::Patch { torque_axes, .. } if torque_axes.len() == 3))
+        .filter(|g| matches!(g, Group::Patch { .. }))
         .count();
     if patches < min_patches.max(1) {
         return false;
@@ -374,9 +257,8 @@ pub(super) fn jump(
     let sizes: Vec<usize> = groups
         .iter()
         .map(|g| match g {
-            Group::Patch { torque_axes, .. } => 3 + torque_axes.len(),
+            Group::Patch { .. } => 6,
             Group::Lone(_) => 3,
-            Group::Slide(..) => 1,
         })
         .collect();
     let m: usize = sizes.iter().sum();
@@ -441,14 +323,9 @@ pub(super) fn jump(
                     .to_array()
                     .to_vec()
             }
-            Group::Slide(k, _) => {
-                let (c, row) = (&contacts[*k], &rows[*k]);
-                vec![c.target_normal_velocity - row.bias.z]
-            }
             Group::Patch {
                 members,
                 arms,
-                torque_axes,
                 inverse_spread,
                 ..
             } => {
@@ -468,9 +345,7 @@ pub(super) fn jump(
                 let mean = wish.iter().map(|(_, d)| *d).sum::<DVec3>() / wish.len() as f64;
                 let turn =
                     *inverse_spread * wish.iter().map(|(r, d)| r.cross(*d - mean)).sum::<DVec3>();
-                let mut out = vec![mean.x, mean.y, mean.z];
-                out.extend(torque_axes.iter().map(|e| turn.dot(*e)));
-                out
+                vec![mean.x, mean.y, mean.z, turn.x, turn.y, turn.z]
             }
         };
         for r in 0..sizes[gi] {
@@ -493,22 +368,14 @@ pub(super) fn jump(
             Group::Lone(k) => {
                 new.push((*k, contacts[*k].impulse + DVec3::new(x(0), x(1), x(2))));
             }
-            Group::Slide(k, rim) => {
-                new.push((*k, contacts[*k].impulse + *rim * x(0)));
-            }
             Group::Patch {
                 members,
                 arms,
-                torque_axes,
                 inverse_spread,
                 ..
             } => {
                 let mut force = DVec3::new(x(0), x(1), x(2));
-                let mut torque = torque_axes
-                    .iter()
-                    .enumerate()
-                    .map(|(i, e)| *e * x(3 + i))
-                    .sum::<DVec3>();
+                let mut torque = DVec3::new(x(3), x(4), x(5));
                 for (&k, r) in members.iter().zip(arms) {
                     let p = rows[k].frame.to_world(contacts[k].impulse);
                     force += p;
