@@ -28,7 +28,7 @@ use impulse_collide::{Motion, Shape, motion::Ballistic};
 use impulse_geom::Pose;
 
 mod rotation;
-use rotation::{grow, isotropic_with_torque, shrink, symmetry_axis, torque_free_axisymmetric};
+use rotation::{isotropic_with_torque, step_doubling, symmetry_axis, torque_free_axisymmetric};
 
 /// Principal moments closer than this, relative to the largest, count as equal: the body then
 /// rotates at constant ω (exact solution). Default `1e-12` (relative).
@@ -627,40 +627,15 @@ impl Body {
             q + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0)
         };
         let tol = integrator.rotation_tolerance;
-        let mut h = if self.step_hint > 0.0 {
+        let h = if self.step_hint > 0.0 {
             self.step_hint
         } else {
             // Start at a tenth of a radian per step.
             let w_end = omega_of(q0, dt).length();
             0.1 / omega_of(q0, 0.0).length().max(w_end).max(f64::MIN_POSITIVE)
         };
-        let (mut t, mut q) = (0.0, q0);
-        let h_min = dt * MIN_STEP_REL;
-        let mut steps = 0;
-        while t < dt {
-            steps += 1;
-            if steps > MAX_ROTATION_STEPS {
-                return Err(AdvanceError::TooManySteps);
-            }
-            let last = h >= dt - t;
-            let step = if last { dt - t } else { h };
-            let full = rk4(q, t, step);
-            let half = rk4(rk4(q, t, 0.5 * step), t + 0.5 * step, 0.5 * step);
-            let err = (half - full).length();
-            if !err.is_finite() {
-                return Err(AdvanceError::NonFinite);
-            }
-            if err <= tol || step <= h_min {
-                // Local extrapolation (fifth order), then back onto the unit sphere.
-                q = (half + (half - full) * (1.0 / 15.0)).normalize();
-                t = if last { dt } else { t + step };
-                if !last || step >= h {
-                    h = grow(step, err, tol);
-                }
-            } else {
-                h = shrink(step, err, tol).max(h_min);
-            }
-        }
+        // Local extrapolation (fifth order) on each accepted step.
+        let (q, h) = step_doubling(q0, dt, h, f64::INFINITY, tol, rk4, true)?;
         self.step_hint = h;
         self.omega = omega_of(q, dt);
         Ok(q)
@@ -670,6 +645,32 @@ impl Body {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The integrator as a reference: a tolerance far below the default's.
+    const TIGHT: Integrator = Integrator {
+        rotation_tolerance: 1e-14,
+    };
+
+    /// How far apart two bodies' orientations are (the largest distance between their body
+    /// axes: an angle from a quaternion's acos resolves only about 3e-8 rad) and their ω
+    /// (relative to the second's).
+    fn apart(a: &Body, b: &Body) -> (f64, f64) {
+        let turn = DVec3::AXES
+            .iter()
+            .map(|&x| (a.pose.rotation * x - b.pose.rotation * x).length())
+            .fold(0.0, f64::max);
+        (turn, (a.omega - b.omega).length() / b.omega.length())
+    }
+
+    /// A random vector in the cube [−1, 1]³.
+    fn unit(rng: &mut rand::rngs::Xoshiro256PlusPlus) -> DVec3 {
+        use rand::RngExt;
+        DVec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        )
+    }
 
     fn brick(omega: DVec3) -> Body {
         let shape = Shape::sphere(1.0).unwrap();
@@ -760,16 +761,7 @@ mod tests {
     fn axisymmetric_closed_form_matches_the_integrator_and_conserves() {
         use rand::{RngExt, SeedableRng};
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(7);
-        let tight = Integrator {
-            rotation_tolerance: 1e-14,
-        };
-        let unit = |rng: &mut rand::rngs::Xoshiro256PlusPlus| {
-            DVec3::new(
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-            )
-        };
+        let tight = TIGHT;
         for case in 0..40 {
             let axis = case % 3;
             let (i_p, i_s) = (rng.random_range(0.5..2.0), rng.random_range(0.2..4.0));
@@ -798,13 +790,7 @@ mod tests {
                 let e = b.kinetic_energy();
                 assert!((e - e0).abs() <= 1e-12 * e0, "energy drift {}", e - e0);
             }
-            // The body axes' directions (an angle from a quaternion's acos resolves only
-            // about 3e-8 rad).
-            let turn = DVec3::AXES
-                .iter()
-                .map(|&a| (b.pose.rotation * a - numeric.pose.rotation * a).length())
-                .fold(0.0, f64::max);
-            let dw = (b.omega - numeric.omega).length() / numeric.omega.length();
+            let (turn, dw) = apart(&b, &numeric);
             assert!(
                 turn < 1e-8 && dw < 1e-8,
                 "case {case}: turned {turn:e} apart, ω {dw:e}"
@@ -991,16 +977,7 @@ mod tests {
     fn an_isotropic_body_under_torque_matches_the_integrator() {
         use rand::{RngExt, SeedableRng};
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(11);
-        let tight = Integrator {
-            rotation_tolerance: 1e-14,
-        };
-        let unit = |rng: &mut rand::rngs::Xoshiro256PlusPlus| {
-            DVec3::new(
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-            )
-        };
+        let tight = TIGHT;
         for case in 0..40 {
             let i = rng.random_range(0.01..1.0);
             let mut b = brick(unit(&mut rng) * rng.random_range(1.0..200.0));
@@ -1019,11 +996,7 @@ mod tests {
                 let q = numeric.rotate_numerically(dt, &tight, m, tau).unwrap();
                 numeric.pose = Pose::new(q, numeric.pose.translation + numeric.velocity * dt);
             }
-            let turn = DVec3::AXES
-                .iter()
-                .map(|&a| (b.pose.rotation * a - numeric.pose.rotation * a).length())
-                .fold(0.0, f64::max);
-            let dw = (b.omega - numeric.omega).length() / numeric.omega.length();
+            let (turn, dw) = apart(&b, &numeric);
             assert!(
                 turn < 1e-10 && dw < 1e-12,
                 "case {case}: turned {turn:e} apart, ω {dw:e}"

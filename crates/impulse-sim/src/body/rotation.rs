@@ -57,7 +57,7 @@ pub(super) fn torque_free_axisymmetric(
 
 /// Step-size controller of the step-doubling RK4 (Numerical Recipes' constants: safety 0.9,
 /// exponent 1/5, growth at most ×4).
-pub(super) fn grow(step: f64, err: f64, tol: f64) -> f64 {
+fn grow(step: f64, err: f64, tol: f64) -> f64 {
     const SAFETY: f64 = 0.9;
     const MAX_GROWTH: f64 = 4.0;
     if err == 0.0 {
@@ -67,7 +67,7 @@ pub(super) fn grow(step: f64, err: f64, tol: f64) -> f64 {
 }
 
 /// Step-size reduction after a rejected step (at least ×0.1).
-pub(super) fn shrink(step: f64, err: f64, tol: f64) -> f64 {
+fn shrink(step: f64, err: f64, tol: f64) -> f64 {
     const SAFETY: f64 = 0.9;
     const MIN_SHRINK: f64 = 0.1;
     step * (SAFETY * (tol / err).powf(0.25)).max(MIN_SHRINK)
@@ -96,7 +96,34 @@ pub(super) fn isotropic_with_torque(
     };
     let speed = omega0.length().max((omega0 + b * dt).length());
     let max_step = MAGNUS_MAX_TURN / speed.max(f64::MIN_POSITIVE);
-    let mut h = dt.min(max_step);
+    let advance = |q: DQuat, t: f64, h: f64| magnus(q, omega0 + b * t, h);
+    let (q, _) = step_doubling(
+        q0,
+        dt,
+        dt.min(max_step),
+        max_step,
+        tolerance,
+        advance,
+        false,
+    )?;
+    Ok((q, omega0 + b * dt))
+}
+
+/// Advances `q0` over `dt` by `advance(q, t, h)` (one step of length h from time t), in steps
+/// whose local error, estimated by step doubling (one step against two half steps), stays
+/// within `tolerance`; starts at `h` and never steps longer than `max_step`. `extrapolate`
+/// takes the fifth-order local extrapolation of a fourth-order method (Runge–Kutta);
+/// otherwise the two half steps are kept. Returns the orientation and the step length to
+/// start the next call with.
+pub(super) fn step_doubling(
+    q0: DQuat,
+    dt: f64,
+    mut h: f64,
+    max_step: f64,
+    tolerance: f64,
+    advance: impl Fn(DQuat, f64, f64) -> DQuat,
+    extrapolate: bool,
+) -> Result<(DQuat, f64), AdvanceError> {
     let h_min = dt * MIN_STEP_REL;
     let (mut t, mut q) = (0.0, q0);
     let mut steps = 0;
@@ -107,22 +134,28 @@ pub(super) fn isotropic_with_torque(
         }
         let last = h >= dt - t;
         let step = if last { dt - t } else { h };
-        let a = omega0 + b * t;
-        let full = magnus(q, a, step);
-        let half = magnus(magnus(q, a, 0.5 * step), a + b * (0.5 * step), 0.5 * step);
-        let err = (half - full).length().min((half + full).length());
+        let full = advance(q, t, step);
+        let half = advance(advance(q, t, 0.5 * step), t + 0.5 * step, 0.5 * step);
+        let err = (half - full).length();
         if !err.is_finite() {
             return Err(AdvanceError::NonFinite);
         }
         if err <= tolerance || step <= h_min {
-            q = half.normalize();
+            // Back onto the unit sphere.
+            q = if extrapolate {
+                (half + (half - full) * (1.0 / 15.0)).normalize()
+            } else {
+                half.normalize()
+            };
             t = if last { dt } else { t + step };
-            h = grow(step, err, tolerance).min(max_step);
+            if !last || step >= h {
+                h = grow(step, err, tolerance).min(max_step);
+            }
         } else {
             h = shrink(step, err, tolerance).max(h_min);
         }
     }
-    Ok((q, omega0 + b * dt))
+    Ok((q, h))
 }
 
 /// Largest rotation of one Magnus step (radians); the expansion converges for steps turning
