@@ -552,7 +552,7 @@ fn along(unit: &[DVec3; 3], p: DVec3) -> DVec3 {
 /// solver takes the global parallelism, and for the small systems of an island's direct solve
 /// its thread hand-offs cost more than the factorisation (measured: 40 % of the dominos' run
 /// in the kernel's scheduler).
-fn dense_solve(mut lu: Mat<f64>, mut rhs: Mat<f64>) -> Mat<f64> {
+pub(super) fn dense_solve(mut lu: Mat<f64>, mut rhs: Mat<f64>) -> Mat<f64> {
     let m = lu.nrows();
     let par = Par::Seq;
     let (mut forward, mut inverse) = (vec![0usize; m], vec![0usize; m]);

@@ -275,12 +275,9 @@ pub(super) fn jump(
         .collect();
     // Columns of W_P: each unknown's unit push, measured by every group sharing a body.
     let mut w = faer::Mat::<f64>::zeros(m, m);
-    let inverse = |b: usize, lin: DVec3, ang: DVec3| match bodies[b].body {
-        Body::Fixed => (DVec3::ZERO, DVec3::ZERO),
-        Body::Moving {
-            inverse_mass,
-            inverse_inertia,
-        } => (lin * inverse_mass, inverse_inertia * ang),
+    let inverse = |b: usize, lin: DVec3, ang: DVec3| {
+        let body = &bodies[b].body;
+        (lin * body.inverse_mass(), body.inverse_inertia() * ang)
     };
     let all_pushes: Vec<Vec<Push>> = groups
         .iter()
@@ -352,7 +349,8 @@ pub(super) fn jump(
             rhs[(offsets[gi] + r, 0)] = wanted[r] - current[r];
         }
     }
-    let solution = faer::linalg::solvers::Solve::solve(&w.partial_piv_lu(), &rhs);
+    // Sequential, as the active-set solve's: the result must not depend on the thread count.
+    let solution = super::direct::dense_solve(w, rhs);
     if !(0..m).all(|i| solution[(i, 0)].is_finite()) {
         return false;
     }
