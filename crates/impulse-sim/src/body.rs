@@ -18,8 +18,12 @@
 //! exact rotation; under a torque their ω changes linearly and the orientation takes Magnus
 //! steps (`rotation.rs`: one per millisecond for a rolling pool ball, where the integrator
 //! took about 25); axisymmetric ones (two equal moments: coins, cylinders, square rods) with
-//! no torque use the closed form of the free symmetric top (`torque_free_axisymmetric`), a
-//! fixed cost whatever the spin and the interval.
+//! no torque use the closed form of the free symmetric top (`torque_free_axisymmetric`), and
+//! bodies with three distinct moments and no torque that of the free asymmetric top
+//! (`free_top.rs`: Jacobi elliptic functions for ω, a quadrature to rounding for the angle
+//! about L), each a fixed cost whatever the spin and the interval. The integrator serves
+//! bodies under a torque and the few motions within `free_top::SEPARATRIX_MC` of the
+//! separatrix.
 
 use std::sync::Arc;
 
@@ -27,7 +31,10 @@ use glam::{DMat3, DQuat, DVec3};
 use impulse_collide::{Motion, Shape, motion::Ballistic};
 use impulse_geom::Pose;
 
+mod elliptic;
+mod free_top;
 mod rotation;
+use free_top::torque_free_asymmetric;
 use rotation::{isotropic_with_torque, step_doubling, symmetry_axis, torque_free_axisymmetric};
 
 /// Principal moments closer than this, relative to the largest, count as equal: the body then
@@ -591,6 +598,12 @@ impl Body {
         {
             let l = self.inertia_world() * self.omega;
             let (q, omega) = torque_free_axisymmetric(q0, l, axis, i_s, i_p, dt);
+            self.omega = omega;
+            return Ok(q);
+        }
+        if tau == DVec3::ZERO
+            && let Some((q, omega)) = torque_free_asymmetric(q0, self.omega, m.moments, dt)
+        {
             self.omega = omega;
             return Ok(q);
         }
