@@ -403,8 +403,8 @@ fn summary(scene: &Scene, rec: &Recording, until: f64) -> String {
     };
     let _ = writeln!(
         s,
-        "pair checks:      {} in {} steps; heap operations {}",
-        c.pair_checks, c.steps, c.heap_operations
+        "pair checks:      {} in {} steps; {} bounds from cached distances; heap operations {}",
+        c.pair_checks, c.steps, c.cached_bounds, c.heap_operations
     );
     let _ = writeln!(
         s,

@@ -5,6 +5,7 @@ use glam::DVec3;
 use impulse_collide::schedule::{Mover, free_coefficients};
 use impulse_collide::{Closest, Convex, FeaturePair, Motion, depth, manifold, patch, shape};
 
+use super::quick_bounds::LastQuery;
 use super::{ContactEvent, ContactFailure, MAX_FAILURES_KEPT, Material, World};
 use crate::contact::{self, ContactKind};
 use crate::error::SimError;
@@ -28,14 +29,6 @@ pub const OVERLAP_NORMAL_TURN: f64 = 1e-6;
 /// acceleration at a quarter of its limit), so that a pair just held is not released at its
 /// first island step and a rocking body does not switch at every step. Default `0.5`.
 pub const HOLD_ROTATION_FRACTION: f64 = 0.5;
-
-/// A pair whose bounding spheres (about the centres of mass, radius r_max) are farther apart
-/// than this fraction of the sum of their radii is bounded by its spheres alone
-/// ([`World::far_bound`]), without a closest-features query: for bodies that far apart the
-/// spheres' gap is within a small factor of the real one. Default `0.25`: a pile's cube
-/// (r_max = 0.43 m for a 0.5 m edge) is queried against its neighbours up to 1.08 m apart,
-/// and bounded by spheres beyond.
-pub const FAR_PAIR_REL: f64 = 0.25;
 
 /// The result of checking a pair: the closest piece pair, and the distance and normal of
 /// every piece pair examined (for the time-of-impact bound, eq. 2.1).
@@ -243,6 +236,10 @@ impl World {
         let Some((d, c, slot)) = best else {
             unreachable!("a shape has at least one piece")
         };
+        state.last = match (na * nb, state.normals[slot]) {
+            (1, Some(normal)) => Some(LastQuery::new(time, [ba, bb], d, normal)),
+            _ => None,
+        };
         near.retain(|p| p.slot != slot);
         near.sort_by(|x, y| x.distance.total_cmp(&y.distance).then(x.slot.cmp(&y.slot)));
         let normal = state.normals[slot];
@@ -279,6 +276,9 @@ impl World {
         if let Some(key) = self.far_bound(pair) {
             return Ok(key);
         }
+        if let Some(key) = self.cached_bound(pair) {
+            return Ok(key);
+        }
         let scan = self.query(pair);
         if scan.distance < self.collision_epsilon() {
             if let Some(n) = scan.normal {
@@ -304,6 +304,9 @@ impl World {
         if let Some(key) = self.far_bound(pair) {
             return Ok(Some(key));
         }
+        if let Some(key) = self.cached_bound(pair) {
+            return Ok(Some(key));
+        }
         let scan = self.query(pair);
         if scan.distance < self.collision_epsilon() {
             return Ok(None);
@@ -312,69 +315,6 @@ impl World {
         self.note_slack(pair, scan.normal, scan.pieces, scan.motions, scan.distance);
         self.far_keyed.remove(&pair);
         Ok(Some(key))
-    }
-
-    /// The key of a far pair ([`FAR_PAIR_REL`]) from its bounding spheres and its bodies' far
-    /// envelopes (`envelope.rs`: bounds on their centres' speed and acceleration, made here
-    /// for a body that has none); `None` for a near pair or one with a link or a scripted
-    /// body (whose motion is not bounded so). The bodies are at least |c_b − c_a| − r_a − r_b
-    /// apart (rotation about a centre keeps a body inside its sphere), and that gap closes no
-    /// faster than the two centres can travel, s·τ + ½·a·τ² each: the thesis's bound (eq.
-    /// 2.1) for the spheres, direction-free, so it holds through every change of the bodies'
-    /// motion that stays inside their envelopes. Records the pair as far-keyed.
-    pub(super) fn far_bound(&mut self, (a, b): (u32, u32)) -> Option<f64> {
-        let (ba, bb) = (self.b(a), self.b(b));
-        let bounded = |x: &crate::body::Body| {
-            matches!(
-                x.kind,
-                crate::body::BodyKind::Dynamic | crate::body::BodyKind::Fixed
-            )
-        };
-        if !(bounded(ba) && bounded(bb)) {
-            return None;
-        }
-        let between = bb.pose.translation - ba.pose.translation;
-        let centres = between.length();
-        let reach = ba.r_max + bb.r_max;
-        let gap = centres - reach;
-        if !(gap > FAR_PAIR_REL * reach && gap > self.collision_epsilon()) {
-            return None;
-        }
-        let (t, g) = (self.time, self.gravity);
-        // Each side's travel bound: nothing for a body that does not move.
-        let mut speed = 0.0;
-        let mut accel = 0.0;
-        for i in [a, b] {
-            let x = self.b(i);
-            if !x.is_dynamic() || x.asleep {
-                continue;
-            }
-            let far = match x.far {
-                Some(far) => match far.tightened(x, t, g) {
-                    // Tighter, inside: the keys made with the old one still hold.
-                    Some(tight) => {
-                        self.b_mut(i).far = Some(tight);
-                        tight
-                    }
-                    None => far,
-                },
-                None => {
-                    let far = super::envelope::FarEnvelope::about(x, t, g);
-                    self.b_mut(i).far = Some(far);
-                    far
-                }
-            };
-            speed += far.speed_at(t);
-            accel += far.accel;
-        }
-        #[cfg(test)]
-        let toi_scale = self.faults.toi_scale;
-        #[cfg(not(test))]
-        let toi_scale = 1.0;
-        let target = self.schedule.target_gap(gap);
-        let tau = impulse_collide::root::closing_time(target, 0.5 * accel, speed);
-        self.far_keyed.insert((a, b));
-        Some(t + toi_scale * tau)
     }
 
     /// The key of a pair: the earliest time any of its piece pairs could close the gap to the

@@ -57,6 +57,7 @@ mod island;
 mod materials;
 mod patch;
 mod profile;
+mod quick_bounds;
 mod steady;
 mod step;
 mod sync;
@@ -151,6 +152,9 @@ pub struct Counters {
     pub steps: u64,
     /// Pair checks (closest-feature queries followed by a time-of-impact bound).
     pub pair_checks: u64,
+    /// Time-of-impact bounds of pairs re-keyed from their last query's distance less how far
+    /// the two bodies have moved since, without a query (`check.rs`: `World::cached_bound`).
+    pub cached_bounds: u64,
     /// Ordinary collisions resolved.
     pub collisions: u64,
     /// Microcollisions (resting contact, thesis §3.5) resolved.
@@ -390,6 +394,9 @@ struct PairState {
     last_hit: Option<f64>,
     /// The slack structure of each side that is a multibody link (`hybrid_step.rs`).
     slack: [Option<hybrid_step::Slack>; 2],
+    /// The last query of a pair of two single-piece bodies (`check.rs`:
+    /// `World::cached_bound`).
+    last: Option<quick_bounds::LastQuery>,
 }
 
 /// One slot of the body table.

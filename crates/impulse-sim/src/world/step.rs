@@ -457,6 +457,7 @@ fn difference(a: &Counters, b: &Counters) -> Counters {
     Counters {
         steps: a.steps - b.steps,
         pair_checks: a.pair_checks - b.pair_checks,
+        cached_bounds: a.cached_bounds - b.cached_bounds,
         collisions: a.collisions - b.collisions,
         microcollisions: a.microcollisions - b.microcollisions,
         reversing: a.reversing - b.reversing,
