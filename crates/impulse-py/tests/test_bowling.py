@@ -1,6 +1,6 @@
-"""The bowling study (thesis §7.4) from Python: a shard and shards merged against the file
-`impulse bowling --out` writes, byte for byte; the binned pins felled against the CLI's
-`--csv`."""
+"""The bowling study (thesis §7.4) from Python: a shard, shards merged and a study spread over
+a Dask LocalCluster of two workers, each against the file `impulse bowling --out` writes, byte
+for byte; the binned pins felled against the CLI's `--csv`."""
 
 import csv
 import json
@@ -43,6 +43,21 @@ def test_four_shards_merged_equal_the_unsharded_file(cli_study, cli, tmp_path):
     assert shards[1] == out.read_text()
     assert [o["index"] for o in json.loads(shards[1])["outcomes"]] == [1, 5]
     assert impulse.merge_bowling_studies(shards[::-1]) == cli_study
+
+
+def test_a_dask_cluster_of_two_workers_gives_the_same_file(cli_study, tmp_path):
+    from dask import distributed
+
+    from impulse.distributed import bowling_study
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        text = bowling_study(THROWS, shards=4, seed=SEED, settle=SETTLE, client=client,
+                             out=tmp_path / "merged.json")
+        assert len(client.run(lambda: 1)) == 2
+    assert text == cli_study
+    assert (tmp_path / "merged.json").read_text() == cli_study
 
 
 def test_the_summary_bins_are_the_clis_csv(cli_study, cli, tmp_path):
