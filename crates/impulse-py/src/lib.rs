@@ -8,7 +8,8 @@
 //! meshes (thesis ch. 6, `massprops`), worlds built from scene files or in code and stepped
 //! with every body's state read as one array (`world`), articulated-body dynamics of URDF
 //! models (ABA, RNEA, CRBA; thesis ch. 4, `dynamics`), pose-study shards and their merge
-//! (thesis §7.5, `poses`), FORK⁻¹S reduced mechanisms' matrices and static response
+//! (thesis §7.5, `poses`), bowling-study shards, their merge and binned pins felled (thesis
+//! §7.4, `bowling`), FORK⁻¹S reduced mechanisms' matrices and static response
 //! (`reduced`); turning every library error into the Python exception
 //! [`ImpulseError`] carrying the library's message; checking array shapes and finiteness before
 //! anything reaches the library; releasing the GIL (`Python::detach`) around every call that
@@ -21,6 +22,7 @@
 //! No `unsafe` of ours: PyO3's macros generate the FFI to CPython.
 #![forbid(unsafe_code)]
 
+mod bowling;
 mod dynamics;
 mod massprops;
 mod poses;
@@ -127,6 +129,7 @@ fn _impulse(m: &Bound<'_, PyModule>) -> PyResult<()> {
     world::register(m)?;
     dynamics::register(m)?;
     poses::register(m)?;
+    bowling::register(m)?;
     reduced::register(m)?;
     Ok(())
 }

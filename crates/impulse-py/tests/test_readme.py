@@ -25,3 +25,6 @@ def test_the_readme_examples_run(root, readme):
     if readme == "README.md":
         # The example's study: 400 drops, every drop's outcome merged back.
         assert scope["impulse"].pose_summary(scope["part"], scope["study"])["drops"] == 400
+        # The bowling example's 2 + 2 throws, merged from its two shards; 40 cm in 5 mm bins.
+        assert scope["bins"]["mean"].shape == (80, 2)
+        assert scope["bins"]["throws"] == 4

@@ -14,6 +14,8 @@ library's message, which names what is wrong and where.
 - :class:`PosePart`, :func:`run_pose_shard`, :func:`merge_pose_studies`,
   :func:`pose_summary`: pose studies (thesis §7.5), in shards; :mod:`impulse.distributed`
   runs them as Dask tasks;
+- :func:`run_bowling_shard`, :func:`merge_bowling_studies`, :func:`bowling_summary`: the
+  bowling study (thesis §7.4), in shards; :mod:`impulse.distributed` runs it as Dask tasks;
 - :class:`ReducedMechanism`: FORK⁻¹S reduced compliant mechanisms, their matrices and static
   response beside the full nonlinear statics.
 """
@@ -27,13 +29,16 @@ from ._impulse import (
     Shape,
     World,
     aba,
+    bowling_summary,
     convex_hull,
     crba,
     mass_properties,
     mass_properties_obj,
+    merge_bowling_studies,
     merge_pose_studies,
     pose_summary,
     rnea,
+    run_bowling_shard,
     run_pose_shard,
 )
 
@@ -46,12 +51,15 @@ __all__ = [
     "Shape",
     "World",
     "aba",
+    "bowling_summary",
     "convex_hull",
     "crba",
     "mass_properties",
     "mass_properties_obj",
+    "merge_bowling_studies",
     "merge_pose_studies",
     "pose_summary",
     "rnea",
+    "run_bowling_shard",
     "run_pose_shard",
 ]

@@ -211,6 +211,31 @@ def pose_summary(
     part: PosePart, study: str, cone: float = 20.0, confidence: float = 0.95
 ) -> dict[str, Any]: ...
 
+# The bowling study (thesis §7.4)
+
+def run_bowling_shard(
+    throws: int = 320,
+    seed: int = 1,
+    shard: Tuple[int, int] = (0, 1),
+    threads: Optional[int] = None,
+    alley: Optional[_Path] = None,
+    speed: float = 8.0,
+    spin: float = 12.0,
+    angle: float = 2.0,
+    center: float = 0.0,
+    width: float = 0.40,
+    settle: float = 4.0,
+) -> str:
+    """The study file text `impulse bowling --shard K/N --out FILE` writes."""
+
+def merge_bowling_studies(studies: Sequence[str]) -> str:
+    """The text `impulse bowling merge ... --out FILE` writes."""
+
+def bowling_summary(study: str, bin_width: float = 0.005) -> dict[str, Any]:
+    """B bins: `lo`, `hi` (B,); `mean`, `se` (B, 2) float64 and `n` (B, 2) int, columns
+    straight, hook; `window`, `pocket`, `head_on`, `shoulders`: dicts of `mean`, `se`, `n`
+    (2,); `throws`, `throws_per_kind`, `outside`, `no_crossing`, `unsettled`."""
+
 # Reduced compliant mechanisms (FORK⁻¹S)
 
 class ReducedMechanism:

@@ -1,4 +1,5 @@
-"""Pose studies spread over a Dask cluster: one task per shard, merged by the library.
+"""Pose and bowling studies spread over a Dask cluster: one task per shard, merged by the
+library.
 
 A pose study (thesis §7.5) of ``drops`` drops is cut into ``shards`` shards (shard K runs drops
 K, K + N, K + 2N, ...); each shard is one Dask task calling :func:`impulse.run_pose_shard` on a
@@ -18,8 +19,18 @@ Example (a local cluster of two worker processes)::
         text = pose_study(part, drops=2000, shards=8, client=client)
     table = impulse.pose_summary(part, text)
 
+A bowling study (thesis §7.4) of ``throws`` throws of each kind is spread the same way with
+:func:`bowling_study` (shard K runs throws K, K + N, ...; :func:`impulse.run_bowling_shard` per
+task, :func:`impulse.merge_bowling_studies` to merge): the merged file is byte for byte the
+file ``impulse bowling --throws THROWS --seed SEED --out FILE`` writes on one machine::
+
+    with LocalCluster(n_workers=2, threads_per_worker=1) as cluster, Client(cluster) as client:
+        text = bowling_study(throws=320, shards=16, client=client)
+    bins = impulse.bowling_summary(text)
+
 Without Dask, the same shards run as a Slurm job array of ``impulse poses --shard K/N`` and
-``impulse poses merge`` (the README's "impulse poses" section has the script).
+``impulse poses merge`` (the README's "impulse poses" section has the script), or of
+``impulse bowling --shard K/N`` and ``impulse bowling merge``.
 
 Dask is imported only when these functions are called: ``pip install "dask[distributed]"``.
 """
@@ -31,7 +42,7 @@ from typing import Any, Optional, Union
 
 from . import _impulse
 
-__all__ = ["pose_study", "pose_study_graph"]
+__all__ = ["bowling_study", "bowling_study_graph", "pose_study", "pose_study_graph"]
 
 
 def pose_study_graph(
@@ -54,8 +65,7 @@ def pose_study_graph(
     """
     import dask
 
-    if not isinstance(shards, int) or shards < 1:
-        raise _impulse.ImpulseError(f"shards = {shards!r}: need a whole number ≥ 1")
+    shards = _shards_checked(shards)
     if not isinstance(drops, int) or drops < 1:
         raise _impulse.ImpulseError(f"drops = {drops!r}: a study needs at least one drop")
     run = dask.delayed(_impulse.run_pose_shard, pure=True)
@@ -71,6 +81,29 @@ def pose_study_graph(
         for k in range(shards)
     ]
     return dask.delayed(_impulse.merge_pose_studies, pure=True)(parts)
+
+
+def _shards_checked(shards: Any) -> int:
+    if not isinstance(shards, int) or shards < 1:
+        raise _impulse.ImpulseError(f"shards = {shards!r}: need a whole number ≥ 1")
+    return shards
+
+
+def _compute(graph: Any, client: Optional[Any], out: Optional[Union[str, os.PathLike]]) -> str:
+    """The graph's value on ``client`` (default: the current client, else Dask's default
+    scheduler), also written to ``out`` if given, as the CLI's ``--out`` writes it."""
+    if client is None:
+        try:
+            from dask.distributed import get_client
+
+            client = get_client()
+        except (ImportError, ValueError):
+            client = None
+    text = client.compute(graph).result() if client is not None else graph.compute()
+    if out is not None:
+        with open(out, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+    return text
 
 
 def pose_study(
@@ -96,15 +129,63 @@ def pose_study(
     graph = pose_study_graph(
         part, drops, shards, seed=seed, threads_per_shard=threads_per_shard, **settings
     )
-    if client is None:
-        try:
-            from dask.distributed import get_client
+    return _compute(graph, client, out)
 
-            client = get_client()
-        except (ImportError, ValueError):
-            client = None
-    text = client.compute(graph).result() if client is not None else graph.compute()
-    if out is not None:
-        with open(out, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
-    return text
+
+def bowling_study_graph(
+    throws: int,
+    shards: int,
+    *,
+    seed: int = 1,
+    threads_per_shard: int = 1,
+    **settings: Any,
+):
+    """The bowling study as a Dask graph: a ``dask.delayed`` whose value is the merged file text.
+
+    One task per shard (``impulse.run_bowling_shard(throws, seed=seed, shard=(k, shards),
+    threads=threads_per_shard, **settings)``) and one merge task
+    (:func:`impulse.merge_bowling_studies`). ``settings`` are the keywords of
+    :func:`impulse.run_bowling_shard` (``speed``, ``spin``, ``angle``, ``center``, ``width``,
+    ``settle``, ``alley``: an alley file's path, which must be readable on the workers).
+    Compute it with any Dask scheduler.
+    """
+    import dask
+
+    shards = _shards_checked(shards)
+    if not isinstance(throws, int) or throws < 1:
+        raise _impulse.ImpulseError(
+            f"throws = {throws!r}: a study needs at least one throw of each kind"
+        )
+    run = dask.delayed(_impulse.run_bowling_shard, pure=True)
+    parts = [
+        run(throws, seed=seed, shard=(k, shards), threads=threads_per_shard, **settings)
+        for k in range(shards)
+    ]
+    return dask.delayed(_impulse.merge_bowling_studies, pure=True)(parts)
+
+
+def bowling_study(
+    throws: int,
+    shards: int,
+    *,
+    client: Optional[Any] = None,
+    seed: int = 1,
+    threads_per_shard: int = 1,
+    out: Optional[Union[str, os.PathLike]] = None,
+    **settings: Any,
+) -> str:
+    """Runs a bowling study (thesis §7.4) as ``shards`` Dask tasks; returns the merged file's text.
+
+    ``throws`` of each kind (straight and hook) in the whole study; ``settings`` as
+    :func:`impulse.run_bowling_shard`'s keywords. ``client``: a ``dask.distributed.Client``
+    (default: the current client if there is one, else Dask's default scheduler). ``out``: also
+    write the text to this file, as ``impulse bowling --out`` does. The text equals, byte for
+    byte, the file of the same study run in one process (``impulse.run_bowling_shard(throws,
+    seed=seed, **settings)``) or by ``impulse bowling``. Read the pins felled per bin with
+    :func:`impulse.bowling_summary`. A failed shard raises its :class:`impulse.ImpulseError`
+    here.
+    """
+    graph = bowling_study_graph(
+        throws, shards, seed=seed, threads_per_shard=threads_per_shard, **settings
+    )
+    return _compute(graph, client, out)
