@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""MuJoCo's step time on the FORK⁻¹S helix, for the same-machine ratio of issue 14.
+"""MuJoCo's step time on the FORK⁻¹S helix, for the same-machine ratio in docs/forks.md
+("Against MuJoCo").
 
 Builds the helix of `impulse_reduced::scenes::helix(n)` (fixtures/mechanisms/helix-<n>.ron) as
 MJCF: link i is a 0.1 kg point-like rod at p_i = (0.2 cos a_i, 0.2 sin a_i, 0.05 i),

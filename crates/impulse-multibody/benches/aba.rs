@@ -2,8 +2,8 @@
 //! with alternating axes (y, z, y, …), as in Pinocchio's benchmark; also inverse dynamics
 //! (RNEA), the mass matrix (CRBA) and the multibody collision pieces for comparison.
 //!
-//! Reference (issue 6): Pinocchio 4.1's ABA took 3.4, 18.3, 36.4 and 149 µs for 10, 50, 100
-//! and 400 links (about 0.36 µs per joint); the goal is at most 1.5× those.
+//! Reference: Pinocchio 4.1's ABA took 3.4, 18.3, 36.4 and 149 µs for 10, 50, 100 and 400
+//! links (about 0.36 µs per joint); the project's target is at most 1.5× those.
 //! Run: `cargo bench -p impulse-multibody`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};

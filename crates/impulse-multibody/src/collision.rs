@@ -498,7 +498,8 @@ mod tests {
     use impulse_geom::{Pose, SpatialInertia};
     use rand::RngExt;
 
-    /// Acceptance bound of issue 6 for K against `J M⁻¹ Jᵀ`, relative to max |K|.
+    /// Bound on K from test impulses (Fig. 5.9) against the dense `J M⁻¹ Jᵀ`, relative to max |K|
+    /// (also on propagateImpulse's Δv and K p against theirs): two exact routes, only rounding.
     const K_REL: f64 = 1e-10;
     /// Symmetry and momentum balances: exact identities evaluated in floating point.
     const TIGHT_REL: f64 = 1e-12;

@@ -602,7 +602,8 @@ mod tests {
     use impulse_geom::SpatialInertia;
     use rand::RngExt;
 
-    /// Acceptance bound of issue 6: relative residual of `M v̇ + h = τ` for ABA's `v̇`.
+    /// Bound on the relative residual of `M v̇ + h = τ` for ABA's `v̇` (M by CRBA, h by RNEA) and
+    /// on RNEA(ABA(τ)) − τ: independent recursions for the same dynamics, so only rounding.
     const ABA_REL: f64 = 1e-10;
     /// CRBA against the Jacobian reference `Σ Jᵀ M_l J`, relative to max |M|: both are exact
     /// formulas, so only rounding (O(n·ε) through the depth of the tree) separates them.

@@ -8,7 +8,8 @@
 //! for one c; [`crate::blend::BlendedModel`] builds one per model the first time that model
 //! is the closest and keeps it, so a step costs the weighted sums, not the matching (before,
 //! each step redid the matching of every model for each of the three matrices: most of the
-//! growth of a blended step with the number of models, issue 14's Table 2).
+//! growth of a blended step with the number of models, the paper's Table 2; see "Table 2: µs
+//! per blended step" in `docs/forks.md`).
 //!
 //! The matching here is its own implementation on flat arrays; [`crate::blend::blend_rank1`]
 //! stays the per-call form of Algorithm 3 and [`crate::blend::blend_poses`] of eq. 28, and

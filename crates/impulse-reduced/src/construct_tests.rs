@@ -8,9 +8,9 @@ use crate::reference::LinearStatics;
 use crate::reference::kinematics::{Configuration, body_jacobian, link_poses};
 use crate::testutil::{block_rel_error, random_mechanism, rng};
 
-/// Issue 14 acceptance: trees, construction against `J C_q Jᵀ`, block by block.
+/// Trees: the constructed compliance against the exact `J C_q Jᵀ`, block by block (relative).
 const TREE_REL: f64 = 1e-10;
-/// Issue 14 acceptance: loops, construction against the Schur complement.
+/// Loops: the constructed compliance against the full model's Schur complement, block by block.
 const LOOP_REL: f64 = 1e-9;
 /// Blocks that are exactly zero in the reference (independent branches) are judged against
 /// this fraction of the whole matrix.
@@ -125,7 +125,7 @@ fn loops_match_schur_complement() {
     );
 }
 
-/// Issue 14 acceptance: every link's reduced static pose equals the linearised full solution.
+/// Every link's reduced static pose against the linearised full solution (relative).
 const STATIC_REL: f64 = 1e-9;
 
 fn random_wrenches(rng: &mut rand::rngs::Xoshiro256PlusPlus, n: usize) -> Vec<Wrench> {

@@ -10,10 +10,10 @@ use super::*;
 use crate::reference::LinearStatics;
 use crate::testutil::{random_diamonds, random_mechanism, rng};
 
-/// Issue 14 acceptance: Σ over parents of the mapped wrenches equals the child's wrench
-/// (eq. 15), relative to the largest wrench at that link.
+/// Equilibrium at a link: Σ over parents of the mapped wrenches equals the child's wrench
+/// (eq. 15), relative to the largest wrench at that link; an identity, so only rounding.
 const EQ15_REL: f64 = 1e-12;
-/// Issue 14 acceptance: the power `ξᵀw` is the same in any frame, relative to `|ξ|·|w|`.
+/// Power invariance (eq. 18): `ξᵀw` is the same in any frame, relative to `|ξ|·|w|`.
 const POWER_REL: f64 = 1e-12;
 /// Trees: every joint's wrench equals the equilibrium of the subtree below it, and its free
 /// components the full linearised statics' spring forces `δθ/c`, relative to the largest

@@ -68,7 +68,7 @@ fn expect_error(text: &str, words: &[&str]) {
     }
 }
 
-/// Malformed multibodies (issue 13): each is an error naming the multibody and the link,
+/// Malformed multibodies (`docs/hybrid.md`): each is an error naming the multibody and the link,
 /// joint or controller at fault.
 #[test]
 fn malformed_multibodies_name_what_is_wrong() {

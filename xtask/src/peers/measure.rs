@@ -3,7 +3,7 @@
 //!
 //! Every reference is computed from the scene description (gravity, μ, launch velocity,
 //! geometry), never copied from the file's comments; the one exception is the dominos' last
-//! topple time, which has no closed form ([`DOMINO_TOPPLE_REF`], from issue 12).
+//! topple time, which has no closed form ([`DOMINO_TOPPLE_REF`], from converged runs).
 
 use glam::{DMat3, DQuat, DVec3};
 use impulse_sim::SceneDesc;
@@ -16,7 +16,7 @@ use impulse_sim::scene::{BodyDesc, ContactDesc, MassDesc, ShapeDesc};
 /// the same criterion as validation case V16).
 pub const TOPPLE_DEGREES: f64 = 45.0;
 /// The converged time at which the last domino of `dominos.ron` topples (s): MuJoCo at 0.1 ms
-/// and the pure-impulse mode both give 0.475–0.479 s (issue 12). No closed form exists.
+/// and the pure-impulse mode both give 0.475–0.479 s. No closed form exists.
 pub const DOMINO_TOPPLE_REF: (f64, f64) = (0.475, 0.479);
 /// A ball rolls once the slip speed of its contact point is below this fraction of its launch
 /// speed (the slip falls linearly from the launch speed to zero while it slides).

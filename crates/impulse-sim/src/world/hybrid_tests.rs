@@ -335,7 +335,7 @@ fn sweep_missed_collisions(cases: usize, seed: u64) -> Sweep {
     out
 }
 
-/// Thesis §5.2, issue 13: random chains and trees (1–8 links, random masses, axes and
+/// Thesis §5.2: random chains and trees (1–8 links, random masses, axes and
 /// rates up to 20 rad/s) swinging past a thin plate and a box: the distance between every
 /// link and each obstacle, along the exact multibody trajectory (re-integrated between
 /// frames and refined by bisection), never falls below −ε_c.
@@ -651,9 +651,9 @@ fn a_rover_driven_by_its_wheel_loops_rolls_at_their_speed() {
 /// box check strict to the integrator's stage states, 16 132).
 const MAX_ROVER_REDOS: u64 = 50;
 
-/// How far (in ε_c) a link of the standing rover may move over 5 s once settled (issue 13:
-/// "no drift beyond a few ε_c in 5 s"; measured: 0.05 ε_c; with its wheels' contacts left to
-/// microcollisions, 102 ε_c).
+/// How far (in ε_c) a link of the standing rover may move over 5 s once settled: a rover held
+/// still should not drift beyond a few ε_c (measured: 0.05 ε_c; with its wheels' contacts left
+/// to microcollisions, 102 ε_c).
 const ROVER_STANDING_DRIFT: f64 = 2.0;
 
 /// The bundled rover (`fixtures/scenes/rover.ron`, its blocks taken away) standing on its

@@ -1,6 +1,6 @@
-//! Self-collision in the world (issue 13): a three-link chain folding onto itself under
-//! gravity, its first and last links (not adjacent) sampled by brute-force distance every
-//! frame, with the option on and off.
+//! Self-collision in the world (`docs/hybrid.md`, "Self-collision"): a three-link chain
+//! folding onto itself under gravity, its first and last links (not adjacent) sampled by
+//! brute-force distance every frame, with the option on and off.
 
 use glam::DVec3;
 use impulse_collide::{PairCache, depth, shape};

@@ -1,4 +1,4 @@
-//! The rover (issue 13; thesis §7.3's creature war, simplified): a high-level controller
+//! The rover (thesis §7.3's creature war, simplified; `docs/hybrid.md`): a high-level controller
 //! written as a user would, against the public `WorldController` trait, drives the rover of
 //! `fixtures/scenes/rover.ron` by its four wheel loops' set-points and pushes every block
 //! off the platform. Checked from the world: every block ends off the platform, the rover
@@ -270,14 +270,14 @@ pub(super) fn rover() -> Result<Vec<Metric>, String> {
 /// length, not at their loaded length.
 const STANDING_SETTLE: f64 = 0.5;
 
-/// How long the standing rover is watched after settling (s): issue 13's "in 5 s".
+/// How long the standing rover is watched after settling (s).
 const STANDING_WATCH: f64 = 5.0;
 
 /// How often the standing rover's links are read (s).
 const STANDING_READ_EVERY: f64 = 0.25;
 
-/// Issue 13's "no drift beyond a few ε_c": a link's frame may move (or turn, times its reach)
-/// this many ε_c over the watch.
+/// A rover held still should not drift beyond a few ε_c: a link's frame may move (or turn,
+/// times its reach) this many ε_c over the watch.
 const STANDING_DRIFT: f64 = 2.0;
 
 /// The standing rover: the scene as it is (every wheel loop holds speed 0, the blocks rest on
