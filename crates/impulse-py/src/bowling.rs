@@ -14,13 +14,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::error;
-
-/// The text of a study file, as the CLI writes it: pretty JSON and a final newline.
-fn study_text(file: &BowlingFile) -> Result<String, String> {
-    serde_json::to_string_pretty(file)
-        .map(|t| t + "\n")
-        .map_err(|e| e.to_string())
-}
+use crate::study_file::{merge_texts, study_text};
 
 /// A study file's text read back and checked (its alley, settings and size), as `impulse
 /// bowling merge` and `--from` read a file; `k` names it in the error.
@@ -105,16 +99,8 @@ fn run_bowling_shard(
 /// Raises `ImpulseError` for files of different studies or a throw held twice.
 #[pyfunction]
 fn merge_bowling_studies(py: Python<'_>, studies: Vec<String>) -> PyResult<String> {
-    py.detach(|| {
-        let files = studies
-            .iter()
-            .enumerate()
-            .map(|(k, t)| read_study(t, k))
-            .collect::<Result<Vec<_>, _>>()?;
-        let merged = bowling::merge(&files).map_err(|e| e.to_string())?;
-        study_text(&merged)
-    })
-    .map_err(error)
+    py.detach(|| merge_texts(&studies, read_study, bowling::merge))
+        .map_err(error)
 }
 
 /// A band's figures, one value per kind: `mean` (NaN without throws), `se` (NaN below two

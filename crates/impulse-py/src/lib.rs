@@ -27,6 +27,7 @@ mod dynamics;
 mod massprops;
 mod poses;
 mod reduced;
+mod study_file;
 mod world;
 
 use glam::DVec3;

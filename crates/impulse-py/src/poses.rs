@@ -13,6 +13,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use crate::study_file::{merge_texts, study_text};
 use crate::world::Shape;
 use crate::{Matrix, error};
 
@@ -163,13 +164,6 @@ impl PosePart {
     }
 }
 
-/// The text of a study file, as the CLI writes it: pretty JSON and a final newline.
-fn study_text(file: &StudyFile) -> Result<String, String> {
-    serde_json::to_string_pretty(file)
-        .map(|t| t + "\n")
-        .map_err(|e| e.to_string())
-}
-
 fn read_study(text: &str, k: usize) -> Result<StudyFile, String> {
     serde_json::from_str(text).map_err(|e| format!("studies[{k}]: not a pose study file: {e}"))
 }
@@ -240,16 +234,8 @@ fn run_pose_shard(
 /// files of different studies or a drop held twice.
 #[pyfunction]
 fn merge_pose_studies(py: Python<'_>, studies: Vec<String>) -> PyResult<String> {
-    py.detach(|| {
-        let files = studies
-            .iter()
-            .enumerate()
-            .map(|(k, t)| read_study(t, k))
-            .collect::<Result<Vec<_>, _>>()?;
-        let merged = poses::merge(&files).map_err(|e| e.to_string())?;
-        study_text(&merged)
-    })
-    .map_err(error)
+    py.detach(|| merge_texts(&studies, read_study, poses::merge))
+        .map_err(error)
 }
 
 /// The estimates of a study (its file's text) for `part`: a dict with `drops`,
