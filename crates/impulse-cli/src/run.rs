@@ -247,6 +247,16 @@ fn profile_text(p: &impulse_sim::Profile, world: &World) -> String {
             c.rollbacks, c.box_violations, c.slack_violations, c.link_contacts
         ));
     }
+    for h in world.multibody_handles() {
+        let (Some(sim), Some(name)) = (world.multibody(h), world.multibody_name(h)) else {
+            continue;
+        };
+        let (s, l) = (sim.stats(), sim.limit_stats());
+        text.push_str(&format!(
+            "  multibody {name}: {} steps ({} rejected, {} derivative evaluations), {} resting on stops, {} stops struck ({} trial steps locating them)\n",
+            s.steps, s.rejected_steps, s.derivative_evaluations, l.resting_steps, l.strikes, l.locating_steps
+        ));
+    }
     text
 }
 

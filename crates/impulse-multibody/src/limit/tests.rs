@@ -331,3 +331,44 @@ fn the_travel_of_a_struck_step_holds_no_state_beyond_the_stop() {
         "a recorded state {lowest} m below the stop"
     );
 }
+
+/// Most trial integrations per located stop, on average, that the interpolating search may
+/// take on a smooth approach (bisection from a step of ~1 ms to 1e-12 s takes about 30).
+const TRIES_PER_STRIKE: f64 = 4.0;
+
+/// Strikes are located to the tolerance at the closed form's instants, in a few trial
+/// integrations each: a slider bouncing on its stop (a polynomial motion, strikes at
+/// t₁ = √(2h/g) and then every 2·eᵏ·u/g), and a rod swinging onto its stop (not polynomial:
+/// the interpolant's aim is off by O(h⁴) and the search still needs few tries).
+#[test]
+fn a_strike_is_located_in_a_few_tries_at_the_closed_form_instant() {
+    let (h0, e) = (0.05, 0.5);
+    let mut sim = Simulation::new(slider(2.0, e), vec![h0], vec![0.0], tight()).unwrap();
+    let t1 = (2.0 * h0 / G).sqrt();
+    let u = G * t1;
+    let mut want = t1;
+    for k in 0..6 {
+        let at = sim.run_until_strike(1.0).unwrap();
+        assert!(
+            (at - want).abs() <= 4.0 * LIMIT_TIME_TOLERANCE + 1e-15 * want,
+            "strike {k} at {at}, closed form {want}"
+        );
+        want += 2.0 * e.powi(k + 1) * u / G;
+    }
+    let stats = sim.limit_stats();
+    let per_strike = stats.locating_steps as f64 / stats.strikes as f64;
+    assert!(
+        per_strike <= TRIES_PER_STRIKE,
+        "{per_strike} tries per strike ({stats:?})"
+    );
+    let (model, _) = arm(1.5, 0.4, JointLimit::new(-0.8, 1.0, 0.6));
+    let mut rod = Simulation::new(model, vec![0.0], vec![0.0], tight()).unwrap();
+    rod.run_until(3.0).unwrap();
+    let stats = rod.limit_stats();
+    assert!(stats.strikes >= 3, "{stats:?}");
+    let per_strike = stats.locating_steps as f64 / stats.strikes as f64;
+    assert!(
+        per_strike <= TRIES_PER_STRIKE,
+        "{per_strike} tries per strike ({stats:?})"
+    );
+}

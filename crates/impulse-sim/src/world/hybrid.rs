@@ -321,6 +321,12 @@ impl World {
         self.multibodies.get(h.0 as usize).map(|m| &m.sim)
     }
 
+    /// A multibody's name, as its scene or [`World::add_multibody`] gave it.
+    #[must_use]
+    pub fn multibody_name(&self, h: MultibodyHandle) -> Option<&str> {
+        self.multibodies.get(h.0 as usize).map(|m| m.name.as_str())
+    }
+
     /// The world time at which a multibody's clock reads zero.
     #[must_use]
     pub fn multibody_clock(&self, h: MultibodyHandle) -> Option<f64> {
