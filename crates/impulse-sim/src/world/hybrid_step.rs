@@ -114,6 +114,13 @@ impl Slack {
     }
 }
 
+/// The travel a link's side of a pair took over a trial step, as its slack check found it.
+struct SlackTaken {
+    pair: (u32, u32),
+    slot: u32,
+    delta: f64,
+}
+
 /// One multibody's trial step: its simulation at the step's end, every link's travel over
 /// the step, and its links' kinematics at the end.
 type Trial = (
@@ -285,8 +292,9 @@ impl World {
                     }
                 }
             }
-            // The checks.
+            // The checks; the travel each pair's slack takes is kept for the commit.
             let mut widen = Vec::new();
+            let mut taken: Vec<SlackTaken> = Vec::new();
             let (mut boxes, mut slacks) = (0, 0);
             for (mi, (_, travel, _)) in trials.iter().enumerate() {
                 for &(id, slot) in &self.multibodies[mi].links {
@@ -309,14 +317,14 @@ impl World {
                     let boxed = predicted.contains_point(t.origin_min)
                         && predicted.contains_point(t.origin_max);
                     // A held pair has no bound to keep (the islands hold it).
-                    let slacked = self
-                        .heap
-                        .pairs_of(slot)
-                        .filter(|p| !self.is_held(*p))
-                        .all(|p| {
-                            self.slack_of(p, slot)
-                                .is_none_or(|s| s.update(&t.path, *t_end).1)
-                        });
+                    let mut slacked = true;
+                    for p in self.heap.pairs_of(slot).filter(|p| !self.is_held(*p)) {
+                        if let Some(s) = self.slack_of(p, slot) {
+                            let (delta, ok) = s.update(&t.path, *t_end);
+                            taken.push(SlackTaken { pair: p, slot, delta });
+                            slacked &= ok;
+                        }
+                    }
                     boxes += u64::from(!boxed);
                     slacks += u64::from(!slacked);
                     if !(boxed && slacked) {
@@ -328,7 +336,7 @@ impl World {
                 if !widen.is_empty() {
                     self.counters.unchecked_steps += 1;
                 }
-                self.commit_multibodies(trials, *t_end)?;
+                self.commit_multibodies(trials, *t_end, &taken)?;
                 // A struck multibody's islands step now, from its velocity after the strike.
                 for &mi in &struck {
                     for slot in self.link_slots(mi) {
@@ -376,9 +384,16 @@ impl World {
     }
 
     /// Makes the trial the multibodies' state at `t_end`: every link pair's slack takes the
-    /// step's travel, and the link bodies move to their links (at the kinematics the trial
-    /// ended with).
-    fn commit_multibodies(&mut self, trials: Vec<Trial>, t_end: f64) -> Result<(), SimError> {
+    /// step's travel (as the checks found it, `taken`, in the order they visited the
+    /// pairs, or found now for the pairs they skipped), and the link bodies move to their
+    /// links (at the kinematics the trial ended with).
+    fn commit_multibodies(
+        &mut self,
+        trials: Vec<Trial>,
+        t_end: f64,
+        taken: &[SlackTaken],
+    ) -> Result<(), SimError> {
+        let mut taken = taken.iter().peekable();
         for (mi, (sim, travel, end)) in trials.into_iter().enumerate() {
             for k in 0..self.multibodies[mi].links.len() {
                 let (id, slot) = self.multibodies[mi].links[k];
@@ -386,9 +401,12 @@ impl World {
                 let pairs: Vec<(u32, u32)> = self.heap.pairs_of(slot).collect();
                 for p in pairs {
                     let side = usize::from(p.0 != slot);
+                    let checked = taken
+                        .next_if(|k| k.pair == p && k.slot == slot)
+                        .map(|k| k.delta);
                     if let Some(state) = self.pairs.get_mut(&p) {
                         if let Some(s) = &mut state.slack[side] {
-                            s.delta = s.update(&t.path, t_end).0;
+                            s.delta = checked.unwrap_or_else(|| s.update(&t.path, t_end).0);
                             s.t_l = t_end;
                         }
                     }
