@@ -6,7 +6,7 @@
 //!
 //! **Owns**: the Python-facing names and call shapes of the library — exact mass properties of
 //! meshes (thesis ch. 6, `massprops`), worlds built from scene files or in code and stepped
-//! with every body's state read as one array (`world`), articulated-body dynamics of URDF
+//! with every body's state read as one array and the last step's contacts as arrays (`world`), articulated-body dynamics of URDF
 //! models (ABA, RNEA, CRBA; thesis ch. 4, `dynamics`), pose-study shards and their merge
 //! (thesis §7.5, `poses`), bowling-study shards, their merge and binned pins felled (thesis
 //! §7.4, `bowling`), FORK⁻¹S reduced mechanisms' matrices and static response

@@ -5,11 +5,14 @@ use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use glam::{DQuat, DVec3};
+use impulse_sim::contact::ContactKind;
 use impulse_sim::scene::{BodyDesc, MassDesc, MotionDesc, PartDesc, RotationDesc, ShapeDesc};
 use impulse_sim::{
-    BodyHandle, ContactMode, Load, Material, Scene, SimError, StepReport, World, WorldSettings,
+    BodyHandle, ContactEvent, ContactMode, Load, Material, Scene, SimError, StepReport, World,
+    WorldSettings,
 };
-use numpy::PyArray2;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -190,6 +193,18 @@ impl PyWorld {
         })
     }
 
+    /// The row (in `names()` order) of every handle of `handles`, which must be live bodies
+    /// of `world` (rows are slot order, as `World::bodies` iterates).
+    fn rows_of(world: &World, handles: impl Iterator<Item = BodyHandle>) -> Vec<i64> {
+        let all = world.handles();
+        handles
+            .map(|h| {
+                all.binary_search_by_key(&h.index(), |x| x.index())
+                    .map_or(-1, |r| r as i64)
+            })
+            .collect()
+    }
+
     /// One row per body of `f(state)`.
     fn rows<'py, const K: usize>(
         &self,
@@ -200,6 +215,54 @@ impl PyWorld {
             self.read(py, |w| w.bodies().map(|(_, b)| f(&b.state())).collect());
         rows_to_array(py, flat.into_iter())
     }
+}
+
+/// The name the Python side gives a contact's kind.
+fn kind_name(kind: ContactKind) -> &'static str {
+    match kind {
+        ContactKind::Collision => "collision",
+        ContactKind::Microcollision => "microcollision",
+        ContactKind::Reversing => "reversing",
+        ContactKind::Fallback => "fallback",
+    }
+}
+
+/// The contact events `events` as a dict of arrays, one entry per event; `a`, `b`: the rows
+/// of the two bodies.
+fn impacts_dict<'py>(
+    py: Python<'py>,
+    events: &[ContactEvent],
+    a: Vec<i64>,
+    b: Vec<i64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let scalars =
+        |f: fn(&ContactEvent) -> f64| PyArray1::from_vec(py, events.iter().map(f).collect());
+    let vectors = |f: fn(&ContactEvent) -> DVec3| {
+        rows_to_array(
+            py,
+            events
+                .iter()
+                .map(|e| f(e).to_array())
+                .collect::<Vec<_>>()
+                .into_iter(),
+        )
+    };
+    d.set_item("time", scalars(|e| e.time))?;
+    d.set_item("a", PyArray1::from_vec(py, a))?;
+    d.set_item("b", PyArray1::from_vec(py, b))?;
+    d.set_item(
+        "kind",
+        events.iter().map(|e| kind_name(e.kind)).collect::<Vec<_>>(),
+    )?;
+    d.set_item("impulse", vectors(|e| e.impulse))?;
+    d.set_item("point", vectors(|e| e.point))?;
+    d.set_item("normal", vectors(|e| e.normal))?;
+    d.set_item("normal_speed_before", scalars(|e| e.normal_speed_before))?;
+    d.set_item("normal_speed_after", scalars(|e| e.normal_speed_after))?;
+    d.set_item("energy_before", scalars(|e| e.energy_before))?;
+    d.set_item("energy_after", scalars(|e| e.energy_after))?;
+    Ok(d)
 }
 
 /// A step report as a dict.
@@ -437,6 +500,54 @@ impl PyWorld {
     /// Total kinetic energy of the dynamic bodies and multibodies.
     fn kinetic_energy(&self, py: Python<'_>) -> f64 {
         self.read(py, |w| w.kinetic_energy())
+    }
+
+    /// The contacts resolved during the last `step` or `step_until` call, in the order they
+    /// happened (thesis ch. 3: each an impulse at one point), as a dict of arrays with one
+    /// entry per contact (k of them; `k == step(...)["contacts"]`):
+    /// - `time` (k,): simulated time of the impulse (s);
+    /// - `a`, `b` (k,) int: the rows (in `names()` order) of the two bodies;
+    /// - `kind`: list of k strings, `"collision"`, `"microcollision"` (an approach slower
+    ///   than the microcollision speed, resolved with boosted restitution, thesis §3.5),
+    ///   `"reversing"` (a microcollision resolved by the reversing impulse) or `"fallback"`
+    ///   (a contact the response could not resolve, given a frictionless Newton impulse);
+    /// - `impulse` (k, 3): the impulse on body `a` (world; `b` receives its negative);
+    /// - `point` (k, 3): the contact point; `normal` (k, 3): the unit normal from `b` toward
+    ///   `a`;
+    /// - `normal_speed_before`, `normal_speed_after` (k,): the normal relative velocity
+    ///   (v_a(x) − v_b(x))·n before and after the impulse (thesis eq. 3.3: negative while the
+    ///   bodies approach; after a frictionless collision of restitution e, −e times before);
+    /// - `energy_before`, `energy_after` (k,): the two bodies' kinetic energy (J).
+    ///
+    /// Under the `"switching"` contact model, contacts held as constraints (see
+    /// `held_pairs`) are solved in island steps and are not listed here.
+    fn impacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (events, a, b) = self.read(py, |w| {
+            let events = w.contacts().to_vec();
+            let a = Self::rows_of(w, events.iter().map(|e| e.a));
+            let b = Self::rows_of(w, events.iter().map(|e| e.b));
+            (events, a, b)
+        });
+        impacts_dict(py, &events, a, b)
+    }
+
+    /// The pairs of bodies in contact now that the `"switching"` model holds as constraints
+    /// (resting and sliding contact, solved in island steps), shape (p, 2) int: the rows of
+    /// the two bodies (in `names()` order), in ascending order. Empty under the `"impulse"`
+    /// model, where every contact is a collision or microcollision (`impacts`).
+    fn held_pairs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+        let rows = self.read(py, |w| {
+            let pairs = w.held_pairs();
+            let a = Self::rows_of(w, pairs.iter().map(|p| p.0));
+            let b = Self::rows_of(w, pairs.iter().map(|p| p.1));
+            a.into_iter()
+                .zip(b)
+                .flat_map(|(a, b)| [a, b])
+                .collect::<Vec<_>>()
+        });
+        Array2::from_shape_vec((rows.len() / 2, 2), rows)
+            .expect("two rows per pair")
+            .into_pyarray(py)
     }
 
     /// Sets the pose of body `name`: `position` (3,), `rotation` quaternion (x, y, z, w).

@@ -131,6 +131,13 @@ class World:
     def states(self) -> _F64:
         """Shape (n, 16): position, quaternion, velocity, angular velocity, centre of mass."""
     def kinetic_energy(self) -> float: ...
+    def impacts(self) -> dict[str, Any]:
+        """Contacts resolved by the last step call, k of them: `time`, `normal_speed_before`,
+        `normal_speed_after`, `energy_before`, `energy_after` (k,); `a`, `b` (k,) int rows;
+        `kind` list of k strings ("collision", "microcollision", "reversing", "fallback");
+        `impulse` (on `a`), `point`, `normal` (from `b` toward `a`) (k, 3)."""
+    def held_pairs(self) -> npt.NDArray[np.int64]:
+        """Pairs held as constraints now (switching model), shape (p, 2) int rows."""
     def set_pose(self, name: str, position: _Vec, rotation: _Vec) -> None: ...
     def set_velocity(self, name: str, velocity: _Vec, angular_velocity: _Vec) -> None: ...
     def apply_impulse(self, name: str, impulse: _Vec, point: _Vec) -> None: ...
