@@ -590,10 +590,54 @@ impl PyWorld {
         self.long(py, |w| w.apply_impulse(Self::handle(w, name)?, j, p))
     }
 
-    /// A constant force (3,) through body `name`'s centre of mass, kept until changed.
+    /// A constant force (3,) through body `name`'s centre of mass, kept until changed
+    /// (`set_load(name, force=force)`).
     fn set_force(&self, py: Python<'_>, name: &str, force: Vector<'_>) -> PyResult<()> {
         let f = DVec3::from_array(vec3("force", &force)?);
         self.long(py, |w| w.set_load(Self::handle(w, name)?, Load::force(f)))
+    }
+
+    /// Sets a constant load on dynamic body `name`, kept until changed or cleared, replacing
+    /// any load: a `force` (3,, world, N) and a `torque` (3,, world, N·m, about the centre of
+    /// mass). With `point` (3,, world), the force acts at that point, and its moment about the
+    /// centre of mass *now*, (point − com) × force, is added to the torque (it is then held
+    /// constant: the force does not follow the point as the body turns). Between collisions
+    /// the centre of mass follows the parabola of g + force/m exactly and the angular
+    /// momentum grows as L₀ + torque·t. Raises `ImpulseError` for an unknown body, a body that
+    /// is not dynamic, or a value that is not finite.
+    #[pyo3(signature = (name, force=None, torque=None, point=None))]
+    fn set_load(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        force: Option<Vector<'_>>,
+        torque: Option<Vector<'_>>,
+        point: Option<Vector<'_>>,
+    ) -> PyResult<()> {
+        let read = |what: &str, v: Option<Vector<'_>>| -> PyResult<DVec3> {
+            v.map_or(Ok(DVec3::ZERO), |v| Ok(DVec3::from_array(vec3(what, &v)?)))
+        };
+        let f = read("force", force)?;
+        let tau = read("torque", torque)?;
+        let point = point
+            .map(|p| vec3("point", &p).map(DVec3::from_array))
+            .transpose()?;
+        self.long(py, |w| {
+            let h = Self::handle(w, name)?;
+            let mut load = Load {
+                force: f,
+                torque: tau,
+            };
+            if let Some(p) = point {
+                load.torque += Load::force_at(f, p, w.state(h)?.com).torque;
+            }
+            w.set_load(h, load)
+        })
+    }
+
+    /// Removes any load from body `name` (`set_force`, `set_load`).
+    fn clear_load(&self, py: Python<'_>, name: &str) -> PyResult<()> {
+        self.long(py, |w| w.clear_load(Self::handle(w, name)?))
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {

@@ -141,7 +141,18 @@ class World:
     def set_pose(self, name: str, position: _Vec, rotation: _Vec) -> None: ...
     def set_velocity(self, name: str, velocity: _Vec, angular_velocity: _Vec) -> None: ...
     def apply_impulse(self, name: str, impulse: _Vec, point: _Vec) -> None: ...
-    def set_force(self, name: str, force: _Vec) -> None: ...
+    def set_force(self, name: str, force: _Vec) -> None:
+        """Force (3,) through the centre of mass, kept until changed."""
+    def set_load(
+        self,
+        name: str,
+        force: Optional[_Vec] = None,
+        torque: Optional[_Vec] = None,
+        point: Optional[_Vec] = None,
+    ) -> None:
+        """Constant force (3,) at `point` (3,, world; default the centre of mass) and torque
+        (3,) about the centre of mass, world, kept until changed."""
+    def clear_load(self, name: str) -> None: ...
 
 # Articulated dynamics (thesis ch. 4)
 
