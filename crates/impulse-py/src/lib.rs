@@ -9,7 +9,7 @@
 //! with every body's state read as one array and the last step's contacts as arrays (`world`), articulated-body dynamics of URDF
 //! models (ABA, RNEA, CRBA; thesis ch. 4, `dynamics`), pose-study shards and their merge
 //! (thesis §7.5, `poses`), bowling-study shards, their merge and binned pins felled (thesis
-//! §7.4, `bowling`), FORK⁻¹S reduced mechanisms' matrices and static response
+//! §7.4, `bowling`), FORK⁻¹S reduced mechanisms' matrices, static response and dynamics
 //! (`reduced`); turning every library error into the Python exception
 //! [`ImpulseError`] carrying the library's message; checking array shapes and finiteness before
 //! anything reaches the library; releasing the GIL (`Python::detach`) around every call that

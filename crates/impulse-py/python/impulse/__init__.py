@@ -16,8 +16,9 @@ library's message, which names what is wrong and where.
   runs them as Dask tasks;
 - :func:`run_bowling_shard`, :func:`merge_bowling_studies`, :func:`bowling_summary`: the
   bowling study (thesis §7.4), in shards; :mod:`impulse.distributed` runs it as Dask tasks;
-- :class:`ReducedMechanism`: FORK⁻¹S reduced compliant mechanisms, their matrices and static
-  response beside the full nonlinear statics.
+- :class:`ReducedMechanism`, :class:`ReducedSimulation`: FORK⁻¹S reduced compliant
+  mechanisms, their matrices and static response beside the full nonlinear statics, and their
+  reduced dynamics, stepped or run as ``impulse reduce`` runs them.
 """
 
 from ._impulse import (
@@ -26,6 +27,7 @@ from ._impulse import (
     Model,
     PosePart,
     ReducedMechanism,
+    ReducedSimulation,
     Shape,
     World,
     aba,
@@ -48,6 +50,7 @@ __all__ = [
     "Model",
     "PosePart",
     "ReducedMechanism",
+    "ReducedSimulation",
     "Shape",
     "World",
     "aba",

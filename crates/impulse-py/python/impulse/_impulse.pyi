@@ -278,3 +278,50 @@ class ReducedMechanism:
         """Reduced static response, shape (E, 3); loads: link -> force (3,) or wrench (6,)."""
     def full_static_positions(self, loads: dict[str, _Vec]) -> _F64:
         """Full nonlinear statics, shape (E, 3)."""
+    def simulation(
+        self,
+        dt: float = 1e-3,
+        loads: Optional[dict[str, _Vec]] = None,
+        ground: Optional[float] = None,
+        threads: Optional[int] = None,
+    ) -> ReducedSimulation:
+        """A reduced simulation at rest, to step (FORK⁻¹S §6)."""
+    def simulate(
+        self,
+        until: float,
+        dt: float = 1e-3,
+        loads: Optional[dict[str, _Vec]] = None,
+        ground: Optional[float] = None,
+        threads: Optional[int] = None,
+        every: int = 1,
+    ) -> dict[str, Any]:
+        """The run of `impulse reduce --until --dt --out`, F frames of L links: `links` (L
+        names), `time` (F,), `positions` (F, L, 3), `orientations` (F, L, 4),
+        `constraint_error` (F,)."""
+
+class ReducedSimulation:
+    """A running reduced simulation; L links: E end effectors, then internal links."""
+
+    def step(self, steps: int = 1) -> _F64:
+        """Advances `steps` steps; end-effector positions after them, shape (E, 3)."""
+    def set_loads(self, loads: dict[str, _Vec]) -> None: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def time(self) -> float: ...
+    @property
+    def steps(self) -> int: ...
+    @property
+    def contacts(self) -> int:
+        """End-effector contacts with the ground in the last step."""
+    def links(self) -> list[str]: ...
+    def positions(self) -> _F64:
+        """Shape (L, 3)."""
+    def orientations(self) -> _F64:
+        """Quaternions (x, y, z, w), shape (L, 4)."""
+    def end_effector_positions(self) -> _F64:
+        """Shape (E, 3)."""
+    def state(self) -> Tuple[_F64, _F64]:
+        """ξ and φ, each shape (E, 6), linear on top."""
+    def energy(self) -> float: ...
+    def constraint_error(self) -> float: ...
