@@ -1,15 +1,20 @@
-//! Worlds of rigid bodies (thesis chapters 1–3 and 7): from scene files or built in code,
-//! stepped with the GIL released, every body's state read as one array per quantity.
+//! Worlds of rigid bodies and multibodies (thesis chapters 1–3, 5 and 7): from scene files or
+//! built in code, stepped with the GIL released, every body's state read as one array per
+//! quantity, the last step's contacts as arrays.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use glam::{DQuat, DVec3};
 use impulse_sim::contact::ContactKind;
-use impulse_sim::scene::{BodyDesc, MassDesc, MotionDesc, PartDesc, RotationDesc, ShapeDesc};
+use impulse_sim::scene::{
+    BaseDesc, BodyDesc, JointOverride, MassDesc, MotionDesc, MultibodyDesc, PartDesc, RotationDesc,
+    ShapeDesc, UrdfDesc,
+};
 use impulse_sim::{
-    BodyHandle, ContactEvent, ContactMode, Load, Material, Scene, SimError, StepReport, World,
-    WorldSettings,
+    BodyHandle, ContactEvent, ContactMode, Load, Material, MultibodyOptions, Scene, SimError,
+    StepReport, World, WorldSettings,
 };
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
@@ -17,6 +22,9 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::{Matrix, Vector, error, finite_vector, rows_to_array, vec3};
+
+/// A 1-D float64 array returned to Python.
+type Array1<'py> = Bound<'py, PyArray1<f64>>;
 
 /// The RON options of scene files: optional fields without `Some(…)`.
 fn ron_options() -> ron::Options {
@@ -145,17 +153,21 @@ fn contact_mode(name: &str) -> PyResult<ContactMode> {
     }
 }
 
-/// A world of fixed and dynamic rigid bodies that collide by impulses (thesis ch. 1–3):
-/// `World(...)` for an empty one built in code, `World.from_scene(path)` from a scene file.
+/// A world of fixed and dynamic rigid bodies and multibodies that collide by impulses (thesis
+/// ch. 1–3, 5): `World(...)` for an empty one built in code (`add_body`, `add_urdf`,
+/// `add_multibody`), `World.from_scene(path)` from a scene file.
 ///
 /// Bodies are numbered in the order they were added (a scene file's order; multibody links
-/// after the bodies); every array method returns one row per body in that order, `names()`
-/// gives it. Steps release the GIL.
+/// after the bodies, as bodies `"<multibody>/<link>"`); every array method returns one row
+/// per body in that order, `names()` gives it. Steps release the GIL.
 #[pyclass(frozen, name = "World", module = "impulse._impulse")]
 pub struct PyWorld {
     world: Mutex<World>,
     /// The contact model the world was built with.
     mode: ContactMode,
+    /// Where relative paths of multibodies added later (URDF files, OBJ shapes) resolve: the
+    /// scene file's directory, or the `base_dir` the world was made with.
+    base_dir: PathBuf,
 }
 
 impl PyWorld {
@@ -203,6 +215,25 @@ impl PyWorld {
                     .map_or(-1, |r| r as i64)
             })
             .collect()
+    }
+
+    /// Builds multibody `desc` (in the world's gravity, its paths against the world's base
+    /// directory) and adds it as `World::from_scene` adds a scene file's multibodies; returns
+    /// the rows of its links' bodies.
+    fn add_multibody_desc(&self, py: Python<'_>, desc: &MultibodyDesc) -> PyResult<Vec<i64>> {
+        let base_dir = &self.base_dir;
+        self.long(py, |w| {
+            let before = w.handles();
+            let (sim, shapes) = desc.build(w.gravity(), base_dir)?;
+            let options = MultibodyOptions::default().with_self_collision(desc.self_collision);
+            w.add_multibody_with(&desc.name, sim, shapes, options)?;
+            let new: Vec<BodyHandle> = w
+                .handles()
+                .into_iter()
+                .filter(|h| !before.contains(h))
+                .collect();
+            Ok(Self::rows_of(w, new.into_iter()))
+        })
     }
 
     /// One row per body of `f(state)`.
@@ -311,9 +342,11 @@ impl PyWorld {
         if let Some(dir) = base_dir {
             settings.base_dir = dir;
         }
+        let base_dir = settings.base_dir.clone();
         Ok(Self {
             world: Mutex::new(World::new(settings).map_err(error)?),
             mode,
+            base_dir,
         })
     }
 
@@ -325,18 +358,20 @@ impl PyWorld {
     #[pyo3(signature = (path, contact_model=None))]
     fn from_scene(py: Python<'_>, path: PathBuf, contact_model: Option<&str>) -> PyResult<Self> {
         let mode = contact_model.map(contact_mode).transpose()?;
-        let (world, mode) = py
+        let (world, mode, base_dir) = py
             .detach(|| {
                 let mut scene = Scene::read(&path)?;
                 if let Some(m) = mode {
                     scene.desc.contact_model = m;
                 }
-                Ok::<_, SimError>((World::from_scene(&scene)?, scene.desc.contact_model))
+                let world = World::from_scene(&scene)?;
+                Ok::<_, SimError>((world, scene.desc.contact_model, scene.base_dir))
             })
             .map_err(error)?;
         Ok(Self {
             world: Mutex::new(world),
             mode,
+            base_dir,
         })
     }
 
@@ -395,6 +430,117 @@ impl PyWorld {
             let h = w.add_body(&desc)?;
             Ok(w.handles().iter().position(|&x| x == h).unwrap_or(0))
         })
+    }
+
+    /// Adds a multibody (thesis ch. 5) described as a scene file's `Multibody(...)` entry
+    /// (RON; see `fixtures/scenes/urdf-arm.ron` and `triple-pendulum.ron`): inline links and
+    /// joints, or a URDF file with overrides, springs, limits, controllers, self-collision.
+    /// Relative paths resolve against the world's base directory (`base_dir`, or the scene
+    /// file's directory). The world then steps it with its bodies exactly as if it were in a
+    /// scene file. Its links become bodies named `"<name>/<link>"`; returns their rows.
+    /// Raises `ImpulseError` for a parse error (line and column), an invalid multibody
+    /// (naming the link, joint or field), an unreadable URDF, or an overlap.
+    fn add_multibody(&self, py: Python<'_>, desc: &str) -> PyResult<Vec<i64>> {
+        let desc: MultibodyDesc = ron_options()
+            .from_str(desc)
+            .map_err(|e| error(format!("multibody: {e}")))?;
+        self.add_multibody_desc(py, &desc)
+    }
+
+    /// Adds the robot of URDF file `path` (links, inertias, `<collision>` shapes, joints and
+    /// their `<dynamics>`) as multibody `name` — what a scene file's
+    /// `Multibody(name, urdf: Urdf(path, joints: [JointOverride(name, q, qd)]), base,
+    /// position, rotation, self_collision)` gives. `position` (3,) and `rotation` (quaternion
+    /// x, y, z, w) place its root link; `floating`: a free root (6 degrees of freedom) instead
+    /// of one welded to the world; `q`, `qd`: initial joint positions and rates by joint name
+    /// (default 0); `self_collision`: its non-adjacent links collide. Returns the rows of its
+    /// links' bodies. Raises `ImpulseError` as `add_multibody`.
+    #[pyo3(signature = (name, path, position=None, rotation=None, floating=false, q=None,
+                        qd=None, self_collision=false))]
+    #[allow(clippy::too_many_arguments)] // Python keyword arguments, all optional
+    fn add_urdf(
+        &self,
+        py: Python<'_>,
+        name: String,
+        path: PathBuf,
+        position: Option<Vector<'_>>,
+        rotation: Option<Vector<'_>>,
+        floating: bool,
+        q: Option<BTreeMap<String, f64>>,
+        qd: Option<BTreeMap<String, f64>>,
+        self_collision: bool,
+    ) -> PyResult<Vec<i64>> {
+        // The library's defaults for every field left out (the integrator's tolerance), as a
+        // scene file's `Multibody(name: …)` gets them.
+        let mut desc: MultibodyDesc = ron_options()
+            .from_str("Multibody(name: \"\")")
+            .map_err(|e| error(format!("multibody: {e}")))?;
+        desc.name = name;
+        if let Some(p) = position {
+            desc.position = vec3("position", &p)?;
+        }
+        if let Some(r) = rotation {
+            let r = finite_vector("rotation", &r, Some(4))?;
+            desc.rotation = RotationDesc::Quaternion(r[0], r[1], r[2], r[3]);
+        }
+        if floating {
+            desc.base = BaseDesc::Floating;
+        }
+        desc.self_collision = self_collision;
+        let (q, qd) = (q.unwrap_or_default(), qd.unwrap_or_default());
+        let mut joints: BTreeMap<&String, JointOverride> = BTreeMap::new();
+        for (j, (map, what)) in [(&q, "q"), (&qd, "qd")].into_iter().enumerate() {
+            for (joint, &value) in map {
+                if !value.is_finite() {
+                    return Err(error(format!(
+                        "{what}[\"{joint}\"] is {value}: must be finite"
+                    )));
+                }
+                let o = joints.entry(joint).or_insert_with(|| JointOverride {
+                    name: joint.clone(),
+                    spring: None,
+                    damping: None,
+                    friction: None,
+                    limit: None,
+                    q: 0.0,
+                    qd: 0.0,
+                });
+                if j == 0 {
+                    o.q = value;
+                } else {
+                    o.qd = value;
+                }
+            }
+        }
+        desc.urdf = Some(UrdfDesc {
+            path: path.to_string_lossy().into_owned(),
+            links: Vec::new(),
+            joints: joints.into_values().collect(),
+        });
+        self.add_multibody_desc(py, &desc)
+    }
+
+    /// The joint state of multibody `name`: positions q, shape (nq,), and velocities v, shape
+    /// (nv,), in the order of `Model.joint_names()` (a floating base's 7 and 6 values first).
+    fn joint_state<'py>(
+        &self,
+        py: Python<'py>,
+        name: &str,
+    ) -> PyResult<(Array1<'py>, Array1<'py>)> {
+        let (q, v) = self
+            .read(py, |w| {
+                let h = w.multibody_handle(name).ok_or_else(|| {
+                    format!(
+                        "multibody \"{name}\": no multibody of that name in the world (it has \
+                         {})",
+                        w.multibody_handles().len()
+                    )
+                })?;
+                let sim = w.multibody(h).expect("a handle of the world");
+                Ok::<_, String>((sim.q().to_vec(), sim.v().to_vec()))
+            })
+            .map_err(error)?;
+        Ok((PyArray1::from_vec(py, q), PyArray1::from_vec(py, v)))
     }
 
     /// Sets the contact (Coulomb `friction`, Stronge `restitution`) of materials `a` and `b`.

@@ -108,6 +108,22 @@ class World:
         fixed: bool = False,
     ) -> int:
         """Returns the body's row; rotation is a quaternion (x, y, z, w)."""
+    def add_multibody(self, desc: str) -> list[int]:
+        """A scene file's `Multibody(...)` entry (RON); returns its links' rows."""
+    def add_urdf(
+        self,
+        name: str,
+        path: _Path,
+        position: Optional[_Vec] = None,
+        rotation: Optional[_Vec] = None,
+        floating: bool = False,
+        q: Optional[dict[str, float]] = None,
+        qd: Optional[dict[str, float]] = None,
+        self_collision: bool = False,
+    ) -> list[int]:
+        """A URDF robot as multibody `name`; q, qd by joint name; returns its links' rows."""
+    def joint_state(self, name: str) -> Tuple[_F64, _F64]:
+        """Multibody `name`'s q (nq,) and v (nv,)."""
     def set_material_pair(self, a: str, b: str, friction: float, restitution: float) -> None: ...
     def step(self, dt: float) -> dict[str, Any]: ...
     def step_until(self, t: float) -> dict[str, Any]: ...
