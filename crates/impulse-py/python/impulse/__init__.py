@@ -15,7 +15,9 @@ library's message, which names what is wrong and where.
   :func:`pose_summary`: pose studies (thesis §7.5), in shards; :mod:`impulse.distributed`
   runs them as Dask tasks;
 - :func:`run_bowling_shard`, :func:`merge_bowling_studies`, :func:`bowling_summary`: the
-  bowling study (thesis §7.4), in shards; :mod:`impulse.distributed` runs it as Dask tasks;
+  bowling study (thesis §7.4), in shards, kept in the CLI's journal to resume a stopped one;
+  :func:`bowling_throw_scene` the scene of one throw; :mod:`impulse.distributed` runs it as
+  Dask tasks;
 - :class:`ReducedMechanism`, :class:`ReducedSimulation`: FORK⁻¹S reduced compliant
   mechanisms, their matrices and static response beside the full nonlinear statics, and their
   reduced dynamics, stepped or run as ``impulse reduce`` runs them.
@@ -32,6 +34,7 @@ from ._impulse import (
     World,
     aba,
     bowling_summary,
+    bowling_throw_scene,
     convex_hull,
     crba,
     mass_properties,
@@ -55,6 +58,7 @@ __all__ = [
     "World",
     "aba",
     "bowling_summary",
+    "bowling_throw_scene",
     "convex_hull",
     "crba",
     "mass_properties",

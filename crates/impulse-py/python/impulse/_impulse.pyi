@@ -259,8 +259,25 @@ def run_bowling_shard(
     center: float = 0.0,
     width: float = 0.40,
     settle: float = 4.0,
+    out: Optional[_Path] = None,
+    max_wall: Optional[float] = None,
 ) -> str:
-    """The study file text `impulse bowling --shard K/N --out FILE` writes."""
+    """The study file text `impulse bowling --shard K/N --out FILE` writes; with `out`, kept
+    in the journal OUT.partial and resumed from it as the CLI does."""
+
+def bowling_throw_scene(
+    index: int,
+    throws: int = 320,
+    seed: int = 1,
+    alley: Optional[_Path] = None,
+    speed: float = 8.0,
+    spin: float = 12.0,
+    angle: float = 2.0,
+    center: float = 0.0,
+    width: float = 0.40,
+    settle: float = 4.0,
+) -> str:
+    """The scene text `impulse bowling --scene INDEX` prints."""
 
 def merge_bowling_studies(studies: Sequence[str]) -> str:
     """The text `impulse bowling merge ... --out FILE` writes."""
