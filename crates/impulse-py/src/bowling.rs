@@ -4,10 +4,14 @@
 //! --out FILE` writes, byte for byte, so a study split over machines by Python
 //! (`impulse.distributed`) or by the CLI merges the same way.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use impulse_sim::batch::Shard;
-use impulse_sim::bowling::{self, AlleyDesc, BIN_WIDTH, BowlingFile, Mean, ThrowSettings};
+use std::time::Instant;
+
+use impulse_sim::batch::{Journal, RunHooks, Shard};
+use impulse_sim::bowling::{
+    self, AlleyDesc, BIN_WIDTH, BowlingFile, Mean, ThrowOutcome, ThrowSettings,
+};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
@@ -37,6 +41,105 @@ fn read_alley(path: Option<&PathBuf>) -> Result<AlleyDesc, String> {
     }
 }
 
+/// The study's settings from the CLI's options (`ThrowSettings::validate` checks them).
+fn throw_settings(
+    speed: f64,
+    spin: f64,
+    angle: f64,
+    center: f64,
+    width: f64,
+    settle: f64,
+) -> ThrowSettings {
+    ThrowSettings {
+        speed,
+        hook_spin: spin,
+        hook_angle_degrees: angle,
+        window_center: center,
+        window_width: width,
+        settle_time: settle,
+    }
+}
+
+/// Runs the throws of `file`'s study in `shard` under the journal of `out` (`OUT.partial`, the
+/// CLI's), as `impulse bowling --out OUT` does: the throws it holds are read back and not run
+/// again, each throw is recorded as it finishes, none starts once `max_wall` seconds have
+/// passed; when the shard's throws are all done, `out` is written and the journal removed.
+/// Without `out`, nothing is kept. Returns the file with the shard's outcomes, or the reason
+/// it stopped before the end.
+fn run_journaled(
+    mut file: BowlingFile,
+    shard: Shard,
+    threads: usize,
+    out: Option<&Path>,
+    max_wall: Option<f64>,
+) -> Result<BowlingFile, String> {
+    let journal = match out {
+        Some(out) => {
+            let header = serde_json::to_value(&file).map_err(|e| e.to_string())?;
+            let header = Journal::header("impulse bowling", shard, &header)?;
+            Some(Journal::open::<ThrowOutcome>(out, &header)?)
+        }
+        None => None,
+    };
+    let (journal, mut outcomes) = match journal {
+        Some((j, before)) => (Some(j), before),
+        None => (None, Vec::new()),
+    };
+    outcomes.sort_by_key(|t| t.index);
+    outcomes.dedup_by_key(|t| t.index);
+    let before: Vec<u64> = outcomes.iter().map(|t| t.index).collect();
+    let wall = Instant::now();
+    let record = |_: u64, t: &ThrowOutcome| {
+        if let Some(j) = &journal {
+            j.record(t);
+        }
+    };
+    let hooks = RunHooks {
+        progress: &|_| {},
+        skip: &|i| before.binary_search(&i).is_ok(),
+        stop: &|| max_wall.is_some_and(|w| wall.elapsed().as_secs_f64() >= w),
+        record: &record,
+    };
+    let now = bowling::run_throws_with(
+        &file.alley,
+        &file.settings,
+        file.seed,
+        file.throws_per_kind,
+        shard,
+        threads,
+        &hooks,
+    )
+    .map_err(|e| e.to_string())?;
+    if let Some(j) = &journal {
+        j.check()?;
+    }
+    outcomes.extend(now.into_iter().map(|(_, t)| t));
+    outcomes.sort_by_key(|t| t.index);
+    let (done, mine) = (
+        outcomes.len() as u64,
+        shard.runs_of(2 * file.throws_per_kind),
+    );
+    file.outcomes = outcomes;
+    if done < mine {
+        let kept = match out {
+            Some(out) => format!(
+                "they are kept in {}: the same call runs the other {} and writes {}",
+                Journal::path_for(out).display(),
+                mine - done,
+                out.display()
+            ),
+            None => "without `out` they are not kept".to_owned(),
+        };
+        return Err(format!(
+            "stopped at the wall-time limit (max_wall), after {done} of {mine} throws; {kept}"
+        ));
+    }
+    if let Some(j) = journal {
+        j.finish(&file)?;
+    }
+    Ok(file)
+}
+
 /// Runs the throws of one shard of a bowling study (thesis §7.4) with the GIL released;
 /// returns the text of the study file, byte for byte what `impulse bowling --throws THROWS
 /// --seed SEED --shard K/N --out FILE` writes (with `shard=(0, 1)`, the whole study). The
@@ -45,11 +148,20 @@ fn read_alley(path: Option<&PathBuf>) -> Result<AlleyDesc, String> {
 /// `angle` (degrees right of straight), the window of pin-line crossings aimed at (`center`,
 /// `width`, m), the longest run after the crossing (`settle`, simulated s), and `alley`, an
 /// `Alley(…)` RON file (default: the USBC alley `impulse bowling --print-alley` prints).
-/// `threads` (default: every core) does not change the result. Raises `ImpulseError` for a
-/// bad shard, setting, throw count or alley file.
+/// `threads` (default: every core) does not change the result.
+///
+/// With `out`, the study is kept as the CLI keeps it: each finished throw in the journal
+/// `OUT.partial`, and the file written to `out` when the shard is done. A call stopped before
+/// that (by `max_wall` seconds of wall-clock time, after which no throw starts, or by a kill)
+/// and made again with the same arguments runs only the throws the journal does not hold —
+/// and so does `impulse bowling … --out OUT`, which reads the same journal, and the other way
+/// round. A call stopped by `max_wall` raises `ImpulseError` saying how many throws it kept.
+/// Raises `ImpulseError` for a bad shard, setting, throw count or alley file, or a journal of
+/// another study at `OUT.partial`.
 #[pyfunction]
 #[pyo3(signature = (throws=320, seed=1, shard=(0, 1), threads=None, alley=None, speed=8.0,
-                    spin=12.0, angle=2.0, center=0.0, width=0.40, settle=4.0))]
+                    spin=12.0, angle=2.0, center=0.0, width=0.40, settle=4.0, out=None,
+                    max_wall=None))]
 #[allow(clippy::too_many_arguments)] // the CLI's options as Python keywords
 fn run_bowling_shard(
     py: Python<'_>,
@@ -64,33 +176,76 @@ fn run_bowling_shard(
     center: f64,
     width: f64,
     settle: f64,
+    out: Option<PathBuf>,
+    max_wall: Option<f64>,
 ) -> PyResult<String> {
     let shard: Shard = format!("{}/{}", shard.0, shard.1).parse().map_err(error)?;
-    let settings = ThrowSettings {
-        speed,
-        hook_spin: spin,
-        hook_angle_degrees: angle,
-        window_center: center,
-        window_width: width,
-        settle_time: settle,
-    };
+    let settings = throw_settings(speed, spin, angle, center, width, settle);
+    if let Some(w) = max_wall
+        && !(w.is_finite() && w > 0.0)
+    {
+        return Err(error(format!(
+            "max_wall {w}: must be a positive number of seconds"
+        )));
+    }
     let threads =
         threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     py.detach(|| {
         let alley = read_alley(alley.as_ref())?;
         settings.validate().map_err(|e| e.to_string())?;
-        let outcomes =
-            bowling::run_throws(&alley, &settings, seed, throws, shard, threads, &|_| {})
-                .map_err(|e| e.to_string())?;
-        study_text(&BowlingFile {
+        let file = BowlingFile {
             alley,
             settings,
             seed,
             throws_per_kind: throws,
-            outcomes,
-        })
+            outcomes: Vec::new(),
+        };
+        study_text(&run_journaled(
+            file,
+            shard,
+            threads,
+            out.as_deref(),
+            max_wall,
+        )?)
     })
     .map_err(error)
+}
+
+/// The scene (RON) of throw `index` of a bowling study, the text `impulse bowling --scene
+/// INDEX` prints (its standard output, final newline included: saved to a file, `impulse run`
+/// or `World.from_scene` replays that throw exactly). The study's keywords as
+/// `run_bowling_shard` takes them. Raises `ImpulseError` for a throw outside the study (0 to
+/// 2·throws − 1), a bad setting or alley file.
+#[pyfunction]
+#[pyo3(signature = (index, throws=320, seed=1, alley=None, speed=8.0, spin=12.0, angle=2.0,
+                    center=0.0, width=0.40, settle=4.0))]
+#[allow(clippy::too_many_arguments)] // the CLI's options as Python keywords
+fn bowling_throw_scene(
+    py: Python<'_>,
+    index: u64,
+    throws: u64,
+    seed: u64,
+    alley: Option<PathBuf>,
+    speed: f64,
+    spin: f64,
+    angle: f64,
+    center: f64,
+    width: f64,
+    settle: f64,
+) -> PyResult<String> {
+    let settings = throw_settings(speed, spin, angle, center, width, settle);
+    py.detach(|| {
+        let alley = read_alley(alley.as_ref())?;
+        settings.validate().map_err(|e| e.to_string())?;
+        let desc = bowling::throw_scene(&alley, &settings, seed, throws, index)
+            .map_err(|e| e.to_string())?;
+        let text = desc.to_ron().map_err(|e| e.to_string())?;
+        Ok(format!(
+            "// Throw {index} of a bowling study (seed {seed}, {throws} throws of each kind): \
+             `impulse run` on this file replays it.\n{text}\n"
+        ))
+    })
+    .map_err(|e: String| error(e))
 }
 
 /// Merges the shard files of one bowling study (their texts, as `run_bowling_shard` returns
@@ -188,6 +343,7 @@ fn bowling_summary<'py>(
 /// Adds this module's names to the extension module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_bowling_shard, m)?)?;
+    m.add_function(wrap_pyfunction!(bowling_throw_scene, m)?)?;
     m.add_function(wrap_pyfunction!(merge_bowling_studies, m)?)?;
     m.add_function(wrap_pyfunction!(bowling_summary, m)?)?;
     Ok(())

@@ -5,11 +5,12 @@
 //! and out; shapes are given in each function's docstring and in `python/impulse/_impulse.pyi`.
 //!
 //! **Owns**: the Python-facing names and call shapes of the library — exact mass properties of
-//! meshes (thesis ch. 6, `massprops`), worlds built from scene files or in code and stepped
-//! with every body's state read as one array (`world`), articulated-body dynamics of URDF
+//! meshes (thesis ch. 6, `massprops`), worlds built from scene files or in code (bodies and
+//! URDF or inline multibodies) and stepped with every body's state read as one array and the
+//! last step's contacts as arrays (`world`), articulated-body dynamics of URDF
 //! models (ABA, RNEA, CRBA; thesis ch. 4, `dynamics`), pose-study shards and their merge
 //! (thesis §7.5, `poses`), bowling-study shards, their merge and binned pins felled (thesis
-//! §7.4, `bowling`), FORK⁻¹S reduced mechanisms' matrices and static response
+//! §7.4, `bowling`), FORK⁻¹S reduced mechanisms' matrices, static response and dynamics
 //! (`reduced`); turning every library error into the Python exception
 //! [`ImpulseError`] carrying the library's message; checking array shapes and finiteness before
 //! anything reaches the library; releasing the GIL (`Python::detach`) around every call that

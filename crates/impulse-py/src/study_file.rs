@@ -6,11 +6,7 @@
 use serde::Serialize;
 
 /// The text of a study file, as the CLI writes it: pretty JSON and a final newline.
-pub(crate) fn study_text<T: Serialize>(file: &T) -> Result<String, String> {
-    serde_json::to_string_pretty(file)
-        .map(|t| t + "\n")
-        .map_err(|e| e.to_string())
-}
+pub(crate) use impulse_sim::batch::study_text;
 
 /// Reads every shard text with `read` (given the text and its index, for the error), merges
 /// the files with `merge`, and returns the merged file's text.

@@ -1,19 +1,30 @@
-//! Worlds of rigid bodies (thesis chapters 1–3 and 7): from scene files or built in code,
-//! stepped with the GIL released, every body's state read as one array per quantity.
+//! Worlds of rigid bodies and multibodies (thesis chapters 1–3, 5 and 7): from scene files or
+//! built in code, stepped with the GIL released, every body's state read as one array per
+//! quantity, the last step's contacts as arrays.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use glam::{DQuat, DVec3};
-use impulse_sim::scene::{BodyDesc, MassDesc, MotionDesc, PartDesc, RotationDesc, ShapeDesc};
-use impulse_sim::{
-    BodyHandle, ContactMode, Load, Material, Scene, SimError, StepReport, World, WorldSettings,
+use impulse_sim::contact::ContactKind;
+use impulse_sim::scene::{
+    BaseDesc, BodyDesc, JointOverride, MassDesc, MotionDesc, MultibodyDesc, PartDesc, RotationDesc,
+    ShapeDesc, UrdfDesc,
 };
-use numpy::PyArray2;
+use impulse_sim::{
+    BodyHandle, ContactEvent, ContactMode, Load, Material, MultibodyOptions, Scene, SimError,
+    StepReport, World, WorldSettings,
+};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::{Matrix, Vector, error, finite_vector, rows_to_array, vec3};
+
+/// A 1-D float64 array returned to Python.
+type Array1<'py> = Bound<'py, PyArray1<f64>>;
 
 /// The RON options of scene files: optional fields without `Some(…)`.
 fn ron_options() -> ron::Options {
@@ -142,17 +153,21 @@ fn contact_mode(name: &str) -> PyResult<ContactMode> {
     }
 }
 
-/// A world of fixed and dynamic rigid bodies that collide by impulses (thesis ch. 1–3):
-/// `World(...)` for an empty one built in code, `World.from_scene(path)` from a scene file.
+/// A world of fixed and dynamic rigid bodies and multibodies that collide by impulses (thesis
+/// ch. 1–3, 5): `World(...)` for an empty one built in code (`add_body`, `add_urdf`,
+/// `add_multibody`), `World.from_scene(path)` from a scene file.
 ///
 /// Bodies are numbered in the order they were added (a scene file's order; multibody links
-/// after the bodies); every array method returns one row per body in that order, `names()`
-/// gives it. Steps release the GIL.
+/// after the bodies, as bodies `"<multibody>/<link>"`); every array method returns one row
+/// per body in that order, `names()` gives it. Steps release the GIL.
 #[pyclass(frozen, name = "World", module = "impulse._impulse")]
 pub struct PyWorld {
     world: Mutex<World>,
     /// The contact model the world was built with.
     mode: ContactMode,
+    /// Where relative paths of multibodies added later (URDF files, OBJ shapes) resolve: the
+    /// scene file's directory, or the `base_dir` the world was made with.
+    base_dir: PathBuf,
 }
 
 impl PyWorld {
@@ -190,6 +205,37 @@ impl PyWorld {
         })
     }
 
+    /// The row (in `names()` order) of every handle of `handles`, which must be live bodies
+    /// of `world` (rows are slot order, as `World::bodies` iterates).
+    fn rows_of(world: &World, handles: impl Iterator<Item = BodyHandle>) -> Vec<i64> {
+        let all = world.handles();
+        handles
+            .map(|h| {
+                all.binary_search_by_key(&h.index(), |x| x.index())
+                    .map_or(-1, |r| r as i64)
+            })
+            .collect()
+    }
+
+    /// Builds multibody `desc` (in the world's gravity, its paths against the world's base
+    /// directory) and adds it as `World::from_scene` adds a scene file's multibodies; returns
+    /// the rows of its links' bodies.
+    fn add_multibody_desc(&self, py: Python<'_>, desc: &MultibodyDesc) -> PyResult<Vec<i64>> {
+        let base_dir = &self.base_dir;
+        self.long(py, |w| {
+            let before = w.handles();
+            let (sim, shapes) = desc.build(w.gravity(), base_dir)?;
+            let options = MultibodyOptions::default().with_self_collision(desc.self_collision);
+            w.add_multibody_with(&desc.name, sim, shapes, options)?;
+            let new: Vec<BodyHandle> = w
+                .handles()
+                .into_iter()
+                .filter(|h| !before.contains(h))
+                .collect();
+            Ok(Self::rows_of(w, new.into_iter()))
+        })
+    }
+
     /// One row per body of `f(state)`.
     fn rows<'py, const K: usize>(
         &self,
@@ -200,6 +246,54 @@ impl PyWorld {
             self.read(py, |w| w.bodies().map(|(_, b)| f(&b.state())).collect());
         rows_to_array(py, flat.into_iter())
     }
+}
+
+/// The name the Python side gives a contact's kind.
+fn kind_name(kind: ContactKind) -> &'static str {
+    match kind {
+        ContactKind::Collision => "collision",
+        ContactKind::Microcollision => "microcollision",
+        ContactKind::Reversing => "reversing",
+        ContactKind::Fallback => "fallback",
+    }
+}
+
+/// The contact events `events` as a dict of arrays, one entry per event; `a`, `b`: the rows
+/// of the two bodies.
+fn impacts_dict<'py>(
+    py: Python<'py>,
+    events: &[ContactEvent],
+    a: Vec<i64>,
+    b: Vec<i64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let scalars =
+        |f: fn(&ContactEvent) -> f64| PyArray1::from_vec(py, events.iter().map(f).collect());
+    let vectors = |f: fn(&ContactEvent) -> DVec3| {
+        rows_to_array(
+            py,
+            events
+                .iter()
+                .map(|e| f(e).to_array())
+                .collect::<Vec<_>>()
+                .into_iter(),
+        )
+    };
+    d.set_item("time", scalars(|e| e.time))?;
+    d.set_item("a", PyArray1::from_vec(py, a))?;
+    d.set_item("b", PyArray1::from_vec(py, b))?;
+    d.set_item(
+        "kind",
+        events.iter().map(|e| kind_name(e.kind)).collect::<Vec<_>>(),
+    )?;
+    d.set_item("impulse", vectors(|e| e.impulse))?;
+    d.set_item("point", vectors(|e| e.point))?;
+    d.set_item("normal", vectors(|e| e.normal))?;
+    d.set_item("normal_speed_before", scalars(|e| e.normal_speed_before))?;
+    d.set_item("normal_speed_after", scalars(|e| e.normal_speed_after))?;
+    d.set_item("energy_before", scalars(|e| e.energy_before))?;
+    d.set_item("energy_after", scalars(|e| e.energy_after))?;
+    Ok(d)
 }
 
 /// A step report as a dict.
@@ -248,9 +342,11 @@ impl PyWorld {
         if let Some(dir) = base_dir {
             settings.base_dir = dir;
         }
+        let base_dir = settings.base_dir.clone();
         Ok(Self {
             world: Mutex::new(World::new(settings).map_err(error)?),
             mode,
+            base_dir,
         })
     }
 
@@ -262,18 +358,20 @@ impl PyWorld {
     #[pyo3(signature = (path, contact_model=None))]
     fn from_scene(py: Python<'_>, path: PathBuf, contact_model: Option<&str>) -> PyResult<Self> {
         let mode = contact_model.map(contact_mode).transpose()?;
-        let (world, mode) = py
+        let (world, mode, base_dir) = py
             .detach(|| {
                 let mut scene = Scene::read(&path)?;
                 if let Some(m) = mode {
                     scene.desc.contact_model = m;
                 }
-                Ok::<_, SimError>((World::from_scene(&scene)?, scene.desc.contact_model))
+                let world = World::from_scene(&scene)?;
+                Ok::<_, SimError>((world, scene.desc.contact_model, scene.base_dir))
             })
             .map_err(error)?;
         Ok(Self {
             world: Mutex::new(world),
             mode,
+            base_dir,
         })
     }
 
@@ -332,6 +430,117 @@ impl PyWorld {
             let h = w.add_body(&desc)?;
             Ok(w.handles().iter().position(|&x| x == h).unwrap_or(0))
         })
+    }
+
+    /// Adds a multibody (thesis ch. 5) described as a scene file's `Multibody(...)` entry
+    /// (RON; see `fixtures/scenes/urdf-arm.ron` and `triple-pendulum.ron`): inline links and
+    /// joints, or a URDF file with overrides, springs, limits, controllers, self-collision.
+    /// Relative paths resolve against the world's base directory (`base_dir`, or the scene
+    /// file's directory). The world then steps it with its bodies exactly as if it were in a
+    /// scene file. Its links become bodies named `"<name>/<link>"`; returns their rows.
+    /// Raises `ImpulseError` for a parse error (line and column), an invalid multibody
+    /// (naming the link, joint or field), an unreadable URDF, or an overlap.
+    fn add_multibody(&self, py: Python<'_>, desc: &str) -> PyResult<Vec<i64>> {
+        let desc: MultibodyDesc = ron_options()
+            .from_str(desc)
+            .map_err(|e| error(format!("multibody: {e}")))?;
+        self.add_multibody_desc(py, &desc)
+    }
+
+    /// Adds the robot of URDF file `path` (links, inertias, `<collision>` shapes, joints and
+    /// their `<dynamics>`) as multibody `name` — what a scene file's
+    /// `Multibody(name, urdf: Urdf(path, joints: [JointOverride(name, q, qd)]), base,
+    /// position, rotation, self_collision)` gives. `position` (3,) and `rotation` (quaternion
+    /// x, y, z, w) place its root link; `floating`: a free root (6 degrees of freedom) instead
+    /// of one welded to the world; `q`, `qd`: initial joint positions and rates by joint name
+    /// (default 0); `self_collision`: its non-adjacent links collide. Returns the rows of its
+    /// links' bodies. Raises `ImpulseError` as `add_multibody`.
+    #[pyo3(signature = (name, path, position=None, rotation=None, floating=false, q=None,
+                        qd=None, self_collision=false))]
+    #[allow(clippy::too_many_arguments)] // Python keyword arguments, all optional
+    fn add_urdf(
+        &self,
+        py: Python<'_>,
+        name: String,
+        path: PathBuf,
+        position: Option<Vector<'_>>,
+        rotation: Option<Vector<'_>>,
+        floating: bool,
+        q: Option<BTreeMap<String, f64>>,
+        qd: Option<BTreeMap<String, f64>>,
+        self_collision: bool,
+    ) -> PyResult<Vec<i64>> {
+        // The library's defaults for every field left out (the integrator's tolerance), as a
+        // scene file's `Multibody(name: …)` gets them.
+        let mut desc: MultibodyDesc = ron_options()
+            .from_str("Multibody(name: \"\")")
+            .map_err(|e| error(format!("multibody: {e}")))?;
+        desc.name = name;
+        if let Some(p) = position {
+            desc.position = vec3("position", &p)?;
+        }
+        if let Some(r) = rotation {
+            let r = finite_vector("rotation", &r, Some(4))?;
+            desc.rotation = RotationDesc::Quaternion(r[0], r[1], r[2], r[3]);
+        }
+        if floating {
+            desc.base = BaseDesc::Floating;
+        }
+        desc.self_collision = self_collision;
+        let (q, qd) = (q.unwrap_or_default(), qd.unwrap_or_default());
+        let mut joints: BTreeMap<&String, JointOverride> = BTreeMap::new();
+        for (j, (map, what)) in [(&q, "q"), (&qd, "qd")].into_iter().enumerate() {
+            for (joint, &value) in map {
+                if !value.is_finite() {
+                    return Err(error(format!(
+                        "{what}[\"{joint}\"] is {value}: must be finite"
+                    )));
+                }
+                let o = joints.entry(joint).or_insert_with(|| JointOverride {
+                    name: joint.clone(),
+                    spring: None,
+                    damping: None,
+                    friction: None,
+                    limit: None,
+                    q: 0.0,
+                    qd: 0.0,
+                });
+                if j == 0 {
+                    o.q = value;
+                } else {
+                    o.qd = value;
+                }
+            }
+        }
+        desc.urdf = Some(UrdfDesc {
+            path: path.to_string_lossy().into_owned(),
+            links: Vec::new(),
+            joints: joints.into_values().collect(),
+        });
+        self.add_multibody_desc(py, &desc)
+    }
+
+    /// The joint state of multibody `name`: positions q, shape (nq,), and velocities v, shape
+    /// (nv,), in the order of `Model.joint_names()` (a floating base's 7 and 6 values first).
+    fn joint_state<'py>(
+        &self,
+        py: Python<'py>,
+        name: &str,
+    ) -> PyResult<(Array1<'py>, Array1<'py>)> {
+        let (q, v) = self
+            .read(py, |w| {
+                let h = w.multibody_handle(name).ok_or_else(|| {
+                    format!(
+                        "multibody \"{name}\": no multibody of that name in the world (it has \
+                         {})",
+                        w.multibody_handles().len()
+                    )
+                })?;
+                let sim = w.multibody(h).expect("a handle of the world");
+                Ok::<_, String>((sim.q().to_vec(), sim.v().to_vec()))
+            })
+            .map_err(error)?;
+        Ok((PyArray1::from_vec(py, q), PyArray1::from_vec(py, v)))
     }
 
     /// Sets the contact (Coulomb `friction`, Stronge `restitution`) of materials `a` and `b`.
@@ -439,6 +648,54 @@ impl PyWorld {
         self.read(py, |w| w.kinetic_energy())
     }
 
+    /// The contacts resolved during the last `step` or `step_until` call, in the order they
+    /// happened (thesis ch. 3: each an impulse at one point), as a dict of arrays with one
+    /// entry per contact (k of them; `k == step(...)["contacts"]`):
+    /// - `time` (k,): simulated time of the impulse (s);
+    /// - `a`, `b` (k,) int: the rows (in `names()` order) of the two bodies;
+    /// - `kind`: list of k strings, `"collision"`, `"microcollision"` (an approach slower
+    ///   than the microcollision speed, resolved with boosted restitution, thesis §3.5),
+    ///   `"reversing"` (a microcollision resolved by the reversing impulse) or `"fallback"`
+    ///   (a contact the response could not resolve, given a frictionless Newton impulse);
+    /// - `impulse` (k, 3): the impulse on body `a` (world; `b` receives its negative);
+    /// - `point` (k, 3): the contact point; `normal` (k, 3): the unit normal from `b` toward
+    ///   `a`;
+    /// - `normal_speed_before`, `normal_speed_after` (k,): the normal relative velocity
+    ///   (v_a(x) − v_b(x))·n before and after the impulse (thesis eq. 3.3: negative while the
+    ///   bodies approach; after a frictionless collision of restitution e, −e times before);
+    /// - `energy_before`, `energy_after` (k,): the two bodies' kinetic energy (J).
+    ///
+    /// Under the `"switching"` contact model, contacts held as constraints (see
+    /// `held_pairs`) are solved in island steps and are not listed here.
+    fn impacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (events, a, b) = self.read(py, |w| {
+            let events = w.contacts().to_vec();
+            let a = Self::rows_of(w, events.iter().map(|e| e.a));
+            let b = Self::rows_of(w, events.iter().map(|e| e.b));
+            (events, a, b)
+        });
+        impacts_dict(py, &events, a, b)
+    }
+
+    /// The pairs of bodies in contact now that the `"switching"` model holds as constraints
+    /// (resting and sliding contact, solved in island steps), shape (p, 2) int: the rows of
+    /// the two bodies (in `names()` order), in ascending order. Empty under the `"impulse"`
+    /// model, where every contact is a collision or microcollision (`impacts`).
+    fn held_pairs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+        let rows = self.read(py, |w| {
+            let pairs = w.held_pairs();
+            let a = Self::rows_of(w, pairs.iter().map(|p| p.0));
+            let b = Self::rows_of(w, pairs.iter().map(|p| p.1));
+            a.into_iter()
+                .zip(b)
+                .flat_map(|(a, b)| [a, b])
+                .collect::<Vec<_>>()
+        });
+        Array2::from_shape_vec((rows.len() / 2, 2), rows)
+            .expect("two rows per pair")
+            .into_pyarray(py)
+    }
+
     /// Sets the pose of body `name`: `position` (3,), `rotation` quaternion (x, y, z, w).
     fn set_pose(
         &self,
@@ -479,10 +736,54 @@ impl PyWorld {
         self.long(py, |w| w.apply_impulse(Self::handle(w, name)?, j, p))
     }
 
-    /// A constant force (3,) through body `name`'s centre of mass, kept until changed.
+    /// A constant force (3,) through body `name`'s centre of mass, kept until changed
+    /// (`set_load(name, force=force)`).
     fn set_force(&self, py: Python<'_>, name: &str, force: Vector<'_>) -> PyResult<()> {
         let f = DVec3::from_array(vec3("force", &force)?);
         self.long(py, |w| w.set_load(Self::handle(w, name)?, Load::force(f)))
+    }
+
+    /// Sets a constant load on dynamic body `name`, kept until changed or cleared, replacing
+    /// any load: a `force` (3,, world, N) and a `torque` (3,, world, N·m, about the centre of
+    /// mass). With `point` (3,, world), the force acts at that point, and its moment about the
+    /// centre of mass *now*, (point − com) × force, is added to the torque (it is then held
+    /// constant: the force does not follow the point as the body turns). Between collisions
+    /// the centre of mass follows the parabola of g + force/m exactly and the angular
+    /// momentum grows as L₀ + torque·t. Raises `ImpulseError` for an unknown body, a body that
+    /// is not dynamic, or a value that is not finite.
+    #[pyo3(signature = (name, force=None, torque=None, point=None))]
+    fn set_load(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        force: Option<Vector<'_>>,
+        torque: Option<Vector<'_>>,
+        point: Option<Vector<'_>>,
+    ) -> PyResult<()> {
+        let read = |what: &str, v: Option<Vector<'_>>| -> PyResult<DVec3> {
+            v.map_or(Ok(DVec3::ZERO), |v| Ok(DVec3::from_array(vec3(what, &v)?)))
+        };
+        let f = read("force", force)?;
+        let tau = read("torque", torque)?;
+        let point = point
+            .map(|p| vec3("point", &p).map(DVec3::from_array))
+            .transpose()?;
+        self.long(py, |w| {
+            let h = Self::handle(w, name)?;
+            let mut load = Load {
+                force: f,
+                torque: tau,
+            };
+            if let Some(p) = point {
+                load.torque += Load::force_at(f, p, w.state(h)?.com).torque;
+            }
+            w.set_load(h, load)
+        })
+    }
+
+    /// Removes any load from body `name` (`set_force`, `set_load`).
+    fn clear_load(&self, py: Python<'_>, name: &str) -> PyResult<()> {
+        self.long(py, |w| w.clear_load(Self::handle(w, name)?))
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {

@@ -105,3 +105,80 @@ def test_bad_arguments_raise_impulse_error_with_the_message(tmp_path, cli_study)
         impulse.merge_bowling_studies([cli_study, cli_study])  # a throw held twice
     with pytest.raises(impulse.ImpulseError, match="bin_width"):
         impulse.bowling_summary(cli_study, bin_width=0.0)
+
+
+def test_a_throws_scene_is_the_clis_byte_for_byte(cli, tmp_path):
+    text = impulse.bowling_throw_scene(5, throws=THROWS, seed=SEED, settle=SETTLE)
+    assert text == cli("bowling", *ARGS, "--scene", 5)  # its standard output, newline and all
+    assert text.startswith("// Throw 5 of a bowling study (seed 3, 4 throws of each kind)")
+    path = tmp_path / "throw5.ron"
+    path.write_text(text)
+    w = impulse.World.from_scene(path)  # the saved scene replays the throw
+    assert "ball" in w.names()
+    # Throw 5 of 8 is a hook: its ball spins about +y at −spin (rad/s) at release.
+    ball = w.names().index("ball")
+    assert w.angular_velocities()[ball][1] == pytest.approx(-12.0, rel=1e-12)
+    with pytest.raises(impulse.ImpulseError, match="throw 8: the study has throws 0 to 7"):
+        impulse.bowling_throw_scene(8, throws=THROWS)
+
+
+def journal_lines(path):
+    return path.read_text().splitlines()
+
+
+def test_a_study_the_cli_stopped_is_finished_by_python(cli_study, cli, tmp_path):
+    out = tmp_path / "study.json"
+    partial = tmp_path / "study.json.partial"
+    # Stopped before its first throw: the CLI's journal holds its header only.
+    cli("bowling", *ARGS, "--max-wall", "1e-9", "--out", out)
+    assert not out.exists() and len(journal_lines(partial)) == 1
+    # Three throws done before, one of them marked: it must be read back, not run again.
+    whole = json.loads(cli_study)
+    done = [dict(o) for o in whole["outcomes"] if o["index"] in (0, 2, 5)]
+    done[2]["felled"] = 11  # no throw fells 11 of 10 pins
+    with open(partial, "a") as f:
+        for o in done:
+            f.write(json.dumps(o) + "\n")
+    text = impulse.run_bowling_shard(THROWS, seed=SEED, settle=SETTLE, threads=2, out=out)
+    expected = dict(whole, outcomes=[done[2] if o["index"] == 5 else o
+                                     for o in whole["outcomes"]])
+    assert json.loads(text) == expected
+    assert out.read_text() == text and not partial.exists()
+    # Unmarked (all throws but one read back), the finished file is the CLI's whole study
+    # byte for byte.
+    out.unlink()
+    cli("bowling", *ARGS, "--max-wall", "1e-9", "--out", out)
+    with open(partial, "a") as f:
+        for o in whole["outcomes"]:
+            if o["index"] != 3:
+                f.write(json.dumps(o) + "\n")
+    assert impulse.run_bowling_shard(THROWS, seed=SEED, settle=SETTLE, threads=2,
+                                     out=out) == cli_study
+    assert out.read_text() == cli_study
+
+
+def test_a_study_python_stopped_is_finished_by_the_cli(cli_study, cli, tmp_path):
+    out = tmp_path / "study.json"
+    partial = tmp_path / "study.json.partial"
+    with pytest.raises(impulse.ImpulseError, match=r"after 0 of 8 throws; they are kept in"):
+        impulse.run_bowling_shard(THROWS, seed=SEED, settle=SETTLE, out=out, max_wall=1e-9)
+    assert not out.exists() and len(journal_lines(partial)) == 1
+    # Stopped after a throw or two (one thread, 0.3 s), if this machine is not much faster.
+    try:
+        impulse.run_bowling_shard(THROWS, seed=SEED, settle=SETTLE, out=out, max_wall=0.3,
+                                  threads=1)
+        kept = 8  # a machine fast enough to throw all 8 in 0.3 s
+    except impulse.ImpulseError as e:
+        kept = int(str(e).split("after ")[1].split(" ")[0])
+        assert 0 < kept < 8 and not out.exists()
+        assert len(journal_lines(partial)) == 1 + kept  # the header, a line per throw
+        report = cli("bowling", *ARGS, "--out", out)  # the CLI reads Python's journal
+        assert f"resumed:          {kept} throws read back" in report
+    assert out.read_text() == cli_study and not partial.exists()
+    # A journal of another study is refused, naming it.
+    cli("bowling", *ARGS, "--max-wall", "1e-9", "--out", out)
+    with pytest.raises(impulse.ImpulseError, match=r"study\.json\.partial holds the runs of "
+                                                   r"another study"):
+        impulse.run_bowling_shard(THROWS, seed=SEED + 1, settle=SETTLE, out=out)
+    with pytest.raises(impulse.ImpulseError, match="max_wall 0"):
+        impulse.run_bowling_shard(THROWS, out=out, max_wall=0.0)

@@ -2,7 +2,8 @@
 //! shards for a batch scheduler, a random stream per run that depends only on (seed, run
 //! index), and running a shard's runs on a thread pool. Whatever the thread count and the
 //! shard split, run i sees the same random numbers, so merged shards equal one run bit for
-//! bit.
+//! bit. A study's journal ([`Journal`]) keeps the runs finished so far, for a stopped study to
+//! be finished later by whichever front end (the CLI, Python) runs it again.
 
 use std::str::FromStr;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -12,6 +13,9 @@ use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 
 use crate::SimError;
+
+mod journal;
+pub use journal::{Journal, study_text};
 
 /// SplitMix64's increment (the golden ratio in 64 bits), to mix a seed with a run index.
 const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;

@@ -15,9 +15,12 @@ library's message, which names what is wrong and where.
   :func:`pose_summary`: pose studies (thesis §7.5), in shards; :mod:`impulse.distributed`
   runs them as Dask tasks;
 - :func:`run_bowling_shard`, :func:`merge_bowling_studies`, :func:`bowling_summary`: the
-  bowling study (thesis §7.4), in shards; :mod:`impulse.distributed` runs it as Dask tasks;
-- :class:`ReducedMechanism`: FORK⁻¹S reduced compliant mechanisms, their matrices and static
-  response beside the full nonlinear statics.
+  bowling study (thesis §7.4), in shards, kept in the CLI's journal to resume a stopped one;
+  :func:`bowling_throw_scene` the scene of one throw; :mod:`impulse.distributed` runs it as
+  Dask tasks;
+- :class:`ReducedMechanism`, :class:`ReducedSimulation`: FORK⁻¹S reduced compliant
+  mechanisms, their matrices and static response beside the full nonlinear statics, and their
+  reduced dynamics, stepped or run as ``impulse reduce`` runs them.
 """
 
 from ._impulse import (
@@ -26,10 +29,12 @@ from ._impulse import (
     Model,
     PosePart,
     ReducedMechanism,
+    ReducedSimulation,
     Shape,
     World,
     aba,
     bowling_summary,
+    bowling_throw_scene,
     convex_hull,
     crba,
     mass_properties,
@@ -48,10 +53,12 @@ __all__ = [
     "Model",
     "PosePart",
     "ReducedMechanism",
+    "ReducedSimulation",
     "Shape",
     "World",
     "aba",
     "bowling_summary",
+    "bowling_throw_scene",
     "convex_hull",
     "crba",
     "mass_properties",

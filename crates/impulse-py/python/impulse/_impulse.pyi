@@ -108,6 +108,22 @@ class World:
         fixed: bool = False,
     ) -> int:
         """Returns the body's row; rotation is a quaternion (x, y, z, w)."""
+    def add_multibody(self, desc: str) -> list[int]:
+        """A scene file's `Multibody(...)` entry (RON); returns its links' rows."""
+    def add_urdf(
+        self,
+        name: str,
+        path: _Path,
+        position: Optional[_Vec] = None,
+        rotation: Optional[_Vec] = None,
+        floating: bool = False,
+        q: Optional[dict[str, float]] = None,
+        qd: Optional[dict[str, float]] = None,
+        self_collision: bool = False,
+    ) -> list[int]:
+        """A URDF robot as multibody `name`; q, qd by joint name; returns its links' rows."""
+    def joint_state(self, name: str) -> Tuple[_F64, _F64]:
+        """Multibody `name`'s q (nq,) and v (nv,)."""
     def set_material_pair(self, a: str, b: str, friction: float, restitution: float) -> None: ...
     def step(self, dt: float) -> dict[str, Any]: ...
     def step_until(self, t: float) -> dict[str, Any]: ...
@@ -131,10 +147,28 @@ class World:
     def states(self) -> _F64:
         """Shape (n, 16): position, quaternion, velocity, angular velocity, centre of mass."""
     def kinetic_energy(self) -> float: ...
+    def impacts(self) -> dict[str, Any]:
+        """Contacts resolved by the last step call, k of them: `time`, `normal_speed_before`,
+        `normal_speed_after`, `energy_before`, `energy_after` (k,); `a`, `b` (k,) int rows;
+        `kind` list of k strings ("collision", "microcollision", "reversing", "fallback");
+        `impulse` (on `a`), `point`, `normal` (from `b` toward `a`) (k, 3)."""
+    def held_pairs(self) -> npt.NDArray[np.int64]:
+        """Pairs held as constraints now (switching model), shape (p, 2) int rows."""
     def set_pose(self, name: str, position: _Vec, rotation: _Vec) -> None: ...
     def set_velocity(self, name: str, velocity: _Vec, angular_velocity: _Vec) -> None: ...
     def apply_impulse(self, name: str, impulse: _Vec, point: _Vec) -> None: ...
-    def set_force(self, name: str, force: _Vec) -> None: ...
+    def set_force(self, name: str, force: _Vec) -> None:
+        """Force (3,) through the centre of mass, kept until changed."""
+    def set_load(
+        self,
+        name: str,
+        force: Optional[_Vec] = None,
+        torque: Optional[_Vec] = None,
+        point: Optional[_Vec] = None,
+    ) -> None:
+        """Constant force (3,) at `point` (3,, world; default the centre of mass) and torque
+        (3,) about the centre of mass, world, kept until changed."""
+    def clear_load(self, name: str) -> None: ...
 
 # Articulated dynamics (thesis ch. 4)
 
@@ -225,8 +259,25 @@ def run_bowling_shard(
     center: float = 0.0,
     width: float = 0.40,
     settle: float = 4.0,
+    out: Optional[_Path] = None,
+    max_wall: Optional[float] = None,
 ) -> str:
-    """The study file text `impulse bowling --shard K/N --out FILE` writes."""
+    """The study file text `impulse bowling --shard K/N --out FILE` writes; with `out`, kept
+    in the journal OUT.partial and resumed from it as the CLI does."""
+
+def bowling_throw_scene(
+    index: int,
+    throws: int = 320,
+    seed: int = 1,
+    alley: Optional[_Path] = None,
+    speed: float = 8.0,
+    spin: float = 12.0,
+    angle: float = 2.0,
+    center: float = 0.0,
+    width: float = 0.40,
+    settle: float = 4.0,
+) -> str:
+    """The scene text `impulse bowling --scene INDEX` prints."""
 
 def merge_bowling_studies(studies: Sequence[str]) -> str:
     """The text `impulse bowling merge ... --out FILE` writes."""
@@ -260,3 +311,50 @@ class ReducedMechanism:
         """Reduced static response, shape (E, 3); loads: link -> force (3,) or wrench (6,)."""
     def full_static_positions(self, loads: dict[str, _Vec]) -> _F64:
         """Full nonlinear statics, shape (E, 3)."""
+    def simulation(
+        self,
+        dt: float = 1e-3,
+        loads: Optional[dict[str, _Vec]] = None,
+        ground: Optional[float] = None,
+        threads: Optional[int] = None,
+    ) -> ReducedSimulation:
+        """A reduced simulation at rest, to step (FORK⁻¹S §6)."""
+    def simulate(
+        self,
+        until: float,
+        dt: float = 1e-3,
+        loads: Optional[dict[str, _Vec]] = None,
+        ground: Optional[float] = None,
+        threads: Optional[int] = None,
+        every: int = 1,
+    ) -> dict[str, Any]:
+        """The run of `impulse reduce --until --dt --out`, F frames of L links: `links` (L
+        names), `time` (F,), `positions` (F, L, 3), `orientations` (F, L, 4),
+        `constraint_error` (F,)."""
+
+class ReducedSimulation:
+    """A running reduced simulation; L links: E end effectors, then internal links."""
+
+    def step(self, steps: int = 1) -> _F64:
+        """Advances `steps` steps; end-effector positions after them, shape (E, 3)."""
+    def set_loads(self, loads: dict[str, _Vec]) -> None: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def time(self) -> float: ...
+    @property
+    def steps(self) -> int: ...
+    @property
+    def contacts(self) -> int:
+        """End-effector contacts with the ground in the last step."""
+    def links(self) -> list[str]: ...
+    def positions(self) -> _F64:
+        """Shape (L, 3)."""
+    def orientations(self) -> _F64:
+        """Quaternions (x, y, z, w), shape (L, 4)."""
+    def end_effector_positions(self) -> _F64:
+        """Shape (E, 3)."""
+    def state(self) -> Tuple[_F64, _F64]:
+        """ξ and φ, each shape (E, 6), linear on top."""
+    def energy(self) -> float: ...
+    def constraint_error(self) -> float: ...
