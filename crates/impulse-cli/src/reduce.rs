@@ -230,23 +230,12 @@ pub fn run(args: &ReduceArgs) -> Result<String, String> {
         std::fs::write(path, json).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     let ne = model.end_effectors.len();
-    let mut w = vec![0.0; 6 * ne];
-    for l in &loads {
-        let i = model
-            .end_effectors
-            .iter()
-            .position(|&e| e == l.link)
-            .ok_or_else(|| {
-                format!(
-                    "--load: link {:?} is not an end effector",
-                    m.links[l.link].name
-                )
-            })?;
-        let b = l.body_wrench(&model.reference[i]).to_array();
-        for r in 0..6 {
-            w[6 * i + r] += b[r];
-        }
-    }
+    let w = model.end_effector_wrenches(&loads).map_err(|link| {
+        format!(
+            "--load: link {:?} is not an end effector",
+            m.links[link].name
+        )
+    })?;
     if args.statics {
         let (ee, _) = model.static_twists(&w);
         let sol = solve_statics(&m, &loads, None, &StaticOptions::default())

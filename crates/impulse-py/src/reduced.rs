@@ -104,25 +104,13 @@ fn wrenches_of(
     model: &ReducedModel,
     loads: &[Load],
 ) -> Result<Vec<f64>, String> {
-    let mut w = vec![0.0; 6 * model.end_effectors.len()];
-    for l in loads {
-        let i = model
-            .end_effectors
-            .iter()
-            .position(|&e| e == l.link)
-            .ok_or_else(|| {
-                format!(
-                    "load on \"{}\": not an end effector (those are {:?})",
-                    mechanism.links[l.link].name,
-                    end_effector_names(mechanism, model)
-                )
-            })?;
-        let b = l.body_wrench(&model.reference[i]).to_array();
-        for r in 0..6 {
-            w[6 * i + r] += b[r];
-        }
-    }
-    Ok(w)
+    model.end_effector_wrenches(loads).map_err(|link| {
+        format!(
+            "load on \"{}\": not an end effector (those are {:?})",
+            mechanism.links[link].name,
+            end_effector_names(mechanism, model)
+        )
+    })
 }
 
 /// Most steps one call may take: `impulse reduce`'s limit on `--until / --dt` (at the

@@ -133,6 +133,28 @@ pub(crate) fn compliance_inputs(m: &Mechanism, cols: &[Mat<f64>]) -> Vec<JointIn
 }
 
 impl ReducedModel {
+    /// The stacked end-effector body wrenches (6|E|, linear on top, each in its end
+    /// effector's axes at the reference pose) of world loads on end effectors: what
+    /// [`ReducedModel::static_twists`] and the reduced dynamics take. Loads on one link add.
+    ///
+    /// # Errors
+    /// The index of the first loaded link that is not an end effector.
+    pub fn end_effector_wrenches(&self, loads: &[Load]) -> Result<Vec<f64>, usize> {
+        let mut w = vec![0.0; 6 * self.end_effectors.len()];
+        for l in loads {
+            let i = self
+                .end_effectors
+                .iter()
+                .position(|&e| e == l.link)
+                .ok_or(l.link)?;
+            let b = l.body_wrench(&self.reference[i]).to_array();
+            for (wr, br) in w[6 * i..6 * i + 6].iter_mut().zip(b) {
+                *wr += br;
+            }
+        }
+        Ok(w)
+    }
+
     /// Builds the model of `m` linearised at configuration `q` (which must close every loop: the
     /// rest pose, or a [`crate::reference::StaticSolution`]); `loads` are the loads that hold
     /// `q` in equilibrium (empty at rest), kept as the bias `b`.

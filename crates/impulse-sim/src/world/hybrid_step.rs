@@ -321,7 +321,11 @@ impl World {
                     for p in self.heap.pairs_of(slot).filter(|p| !self.is_held(*p)) {
                         if let Some(s) = self.slack_of(p, slot) {
                             let (delta, ok) = s.update(&t.path, *t_end);
-                            taken.push(SlackTaken { pair: p, slot, delta });
+                            taken.push(SlackTaken {
+                                pair: p,
+                                slot,
+                                delta,
+                            });
                             slacked &= ok;
                         }
                     }
