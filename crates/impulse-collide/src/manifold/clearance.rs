@@ -187,7 +187,7 @@ pub fn shape_outside(
     let mut points = vec![Vec::new(); manifolds.len()];
     let mut clearance = f64::INFINITY;
     for (i, pa) in a.pieces().iter().enumerate() {
-        let (wa, ca) = (*pose_a * pa.pose, pose_a.transform_point(pa.center));
+        let wa = *pose_a * pa.pose;
         for (j, pb) in b.pieces().iter().enumerate() {
             let pieces = (i as u32, j as u32);
             match manifolds.iter().position(|m| m.pieces == pieces) {
@@ -199,13 +199,31 @@ pub fn shape_outside(
                     clearance = clearance.min(o.clearance);
                 }
                 None => {
-                    let cb = pose_b.transform_point(pb.center);
-                    clearance = clearance.min((ca.distance(cb) - pa.radius - pb.radius).max(0.0));
+                    clearance = clearance.min(piece_sphere_clearance(a, pose_a, i, b, pose_b, j));
                 }
             }
         }
     }
     (points, clearance)
+}
+
+/// The clearance [`shape_outside`] gives piece pair `(i, j)` of two shapes when it holds no
+/// manifold: the distance between the pieces' bounding spheres, or 0 where they overlap.
+/// (A caller that knows a pair will hold none bounds the clearance by it, before the
+/// manifolds are made.)
+#[must_use]
+pub fn piece_sphere_clearance(
+    a: &Shape,
+    pose_a: &Pose,
+    i: usize,
+    b: &Shape,
+    pose_b: &Pose,
+    j: usize,
+) -> f64 {
+    let (pa, pb) = (&a.pieces()[i], &b.pieces()[j]);
+    let ca = pose_a.transform_point(pa.center);
+    let cb = pose_b.transform_point(pb.center);
+    (ca.distance(cb) - pa.radius - pb.radius).max(0.0)
 }
 
 /// A contact face in world coordinates, for the test of a point over it.

@@ -74,7 +74,7 @@ mod reduce;
 #[cfg(test)]
 pub(crate) mod tests;
 
-pub use clearance::{Outside, convex_outside, shape_outside};
+pub use clearance::{Outside, convex_outside, piece_sphere_clearance, shape_outside};
 pub use coherence::match_points;
 
 /// Most points a manifold keeps: four span a face contact's area, and a contact-constrained

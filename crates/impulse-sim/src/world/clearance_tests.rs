@@ -176,3 +176,44 @@ fn a_rolling_dumbbell_keeps_its_speed_and_the_nominal_step() {
         "{steps} island steps for {nominal:.0} nominal ones"
     );
 }
+
+/// Simulated time (s) of the bundled feeder chute (all of it) that
+/// [`the_fast_way_ends_early_only_where_the_manifolds_would_fail_it`] runs.
+const CHUTE_SPAN: f64 = 3.5;
+
+/// The fast way of holding a compound pair ends before making the manifolds at its reach
+/// when the piece pairs measured beyond that reach already bound the clearance too low
+/// (`hold.rs`). That must never change a decision: the bundled feeder chute's caps (two-piece
+/// compounds sliding and tumbling down the tray) run bit for bit as when the manifolds are
+/// always made, and the bound did end the fast way early.
+#[test]
+fn the_fast_way_ends_early_only_where_the_manifolds_would_fail_it() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/scenes/feeder-chute.ron");
+    let scene = Scene::read(&path).expect("the bundled feeder chute");
+    let run = |bounded: bool| {
+        let mut w = World::from_scene(&scene).expect("valid");
+        w.faults.no_clearance_bound = !bounded;
+        w.step_until(CHUTE_SPAN).unwrap();
+        let exits = w
+            .faults
+            .clearance_bound_exits
+            .load(std::sync::atomic::Ordering::Relaxed);
+        let bits: Vec<u64> = w
+            .states()
+            .iter()
+            .flat_map(|s| [s.position, s.velocity, s.omega])
+            .flat_map(|v| v.to_array())
+            .map(f64::to_bits)
+            .collect();
+        (bits, exits)
+    };
+    let (bounded, exits) = run(true);
+    let (full, none) = run(false);
+    assert_eq!(none, 0);
+    assert!(
+        exits > 100,
+        "the bound ended the fast way early {exits} times"
+    );
+    assert_eq!(bounded, full, "a decision changed");
+}

@@ -436,6 +436,11 @@ pub(crate) struct Faults {
     pub quiet_calls: u64,
     /// How many steps handed their bodies' advance to the world's own pool.
     pub pool_steps: u64,
+    /// The fast way of holding a compound pair never ends early on the clearance bound of
+    /// its piece pairs measured within ε_c (`hold.rs`): it always makes the manifolds.
+    pub no_clearance_bound: bool,
+    /// How many times that bound ended the fast way early (shared by a world's clones).
+    pub clearance_bound_exits: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
 #[cfg(test)]
@@ -447,6 +452,8 @@ impl Default for Faults {
             no_quiet_path: false,
             quiet_calls: 0,
             pool_steps: 0,
+            no_clearance_bound: false,
+            clearance_bound_exits: std::sync::Arc::default(),
         }
     }
 }
