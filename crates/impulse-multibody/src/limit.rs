@@ -1,10 +1,10 @@
 //! Joint limits as one-sided impulsive stops.
 //!
 //! A joint that reaches the end of its travel is a collision in joint space, not a penalty
-//! spring: the simulation locates the instant the coordinate reaches its limit (a safeguarded
-//! interpolating search on the integrator's step, to [`LIMIT_TIME_TOLERANCE`]) and applies the generalized impulse
-//! that reverses the joint's approach with the stop's restitution e (Newton's law in joint
-//! space: q̇ⱼ⁺ = −e·q̇ⱼ⁻). A generalized impulse p along joint j changes the whole velocity by
+//! spring: the simulation locates the instant the coordinate reaches its limit (a
+//! safeguarded interpolating search on the integrator's step, to [`LIMIT_TIME_TOLERANCE`])
+//! and applies the generalized impulse that reverses the joint's approach with the stop's
+//! restitution e (Newton's law in joint space: q̇ⱼ⁺ = −e·q̇ⱼ⁻). A generalized impulse p along joint j changes the whole velocity by
 //! Δv = M⁻¹·eⱼ·p (M the joint-space mass matrix, by the composite-rigid-body algorithm), so
 //! p = −(1 + e)·q̇ⱼ⁻ / (M⁻¹)ⱼⱼ; for e ≤ 1 the kinetic energy does not rise (the impulse
 //! acts along one constraint and removes (1 − e²)·½·(q̇ⱼ⁻)²/(M⁻¹)ⱼⱼ).
@@ -40,7 +40,7 @@ pub const MAX_LIMIT_BISECTIONS: usize = 80;
 /// interpolated instant unless the last two tries did not shrink the bracket to this
 /// fraction of its width (dimensionless); it is then the bracket's midpoint, so the search
 /// is never much slower than bisection. Default `0.5`.
-const SECANT_SHRINK: f64 = 0.5;
+const AIM_SHRINK: f64 = 0.5;
 
 /// Points at which the interpolated margin of a struck joint is sampled for its first
 /// sign change on the step (the root of a cubic: at most two turns). Default `16`.
@@ -465,7 +465,7 @@ impl crate::Simulation {
         let mut n = 0;
         while hi - lo > LIMIT_TIME_TOLERANCE && n < MAX_LIMIT_BISECTIONS {
             let width = hi - lo;
-            let aim = (width <= SECANT_SHRINK * widths[1])
+            let aim = (width <= AIM_SHRINK * widths[1])
                 .then(|| self.first_stop_estimate((lo, &q_lo, &v_lo), (hi, &q_hi, &v_hi)))
                 .flatten();
             let t = match (aim, moved_lo) {
