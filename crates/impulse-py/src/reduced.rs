@@ -573,26 +573,12 @@ impl ReducedSimulation {
 
     /// The links' world positions (frame origins), shape (L, 3), `links()` order.
     fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let p = self.poses(py);
-        rows_to_array(
-            py,
-            p.iter()
-                .map(|p| p.translation.to_array())
-                .collect::<Vec<_>>()
-                .into_iter(),
-        )
+        rows_to_array(py, self.poses(py).iter().map(|p| p.translation.to_array()))
     }
 
     /// The links' world orientations as quaternions (x, y, z, w), shape (L, 4).
     fn orientations<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let p = self.poses(py);
-        rows_to_array(
-            py,
-            p.iter()
-                .map(|p| p.rotation.to_array())
-                .collect::<Vec<_>>()
-                .into_iter(),
-        )
+        rows_to_array(py, self.poses(py).iter().map(|p| p.rotation.to_array()))
     }
 
     /// The end effectors' world positions, shape (E, 3).
