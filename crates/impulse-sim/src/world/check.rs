@@ -5,7 +5,7 @@ use glam::DVec3;
 use impulse_collide::schedule::{Mover, free_coefficients};
 use impulse_collide::{Closest, Convex, FeaturePair, Motion, depth, manifold, patch, shape};
 
-use super::quick_bounds::LastQuery;
+use super::quick_bounds::{LastQuery, SlotGap};
 use super::{ContactEvent, ContactFailure, MAX_FAILURES_KEPT, Material, World};
 use crate::contact::{self, ContactKind};
 use crate::error::SimError;
@@ -126,6 +126,11 @@ impl World {
             state.features = vec![FeaturePair::default(); na * nb];
             state.normals = vec![None; na * nb];
         }
+        let compound = na * nb > 1;
+        if compound {
+            state.gaps.clear();
+            state.gaps.resize(na * nb, SlotGap::Skipped);
+        }
         // Piece pairs by increasing bounding-sphere lower bound on their distance.
         let mut order: Vec<(f64, usize, usize)> = Vec::with_capacity(na * nb);
         for (i, pa) in pieces_a.iter().enumerate() {
@@ -163,9 +168,11 @@ impl World {
             );
             checks += 1;
             state.features[slot] = c.features;
+            let mut gap = SlotGap::Unknown;
             if !c.penetrating && c.distance > NORMAL_FROM_POINTS_REL * (ba.r_max + bb.r_max) {
                 if let Some(dir) = c.direction() {
                     state.normals[slot] = Some(-dir);
+                    gap = SlotGap::Apart(c.distance, -dir);
                 }
             } else {
                 // Touching, or so close that the closest points' direction is rounding noise:
@@ -197,6 +204,9 @@ impl World {
                         piece_depth = along;
                     }
                 }
+            }
+            if compound {
+                state.gaps[slot] = gap;
             }
             let d = if c.penetrating { 0.0 } else { c.distance };
             if d < eps {
@@ -236,10 +246,8 @@ impl World {
         let Some((d, c, slot)) = best else {
             unreachable!("a shape has at least one piece")
         };
-        state.last = match (na * nb, state.normals[slot]) {
-            (1, Some(normal)) => Some(LastQuery::new(time, [ba, bb], d, normal)),
-            _ => None,
-        };
+        state.last =
+            state.normals[slot].map(|normal| LastQuery::new(time, [ba, bb], d, normal, slot));
         near.retain(|p| p.slot != slot);
         near.sort_by(|x, y| x.distance.total_cmp(&y.distance).then(x.slot.cmp(&y.slot)));
         let normal = state.normals[slot];

@@ -394,9 +394,12 @@ struct PairState {
     last_hit: Option<f64>,
     /// The slack structure of each side that is a multibody link (`hybrid_step.rs`).
     slack: [Option<hybrid_step::Slack>; 2],
-    /// The last query of a pair of two single-piece bodies (`check.rs`:
-    /// `World::cached_bound`).
+    /// The pair's last query (`check.rs`: `World::cached_bound`): when, where both bodies
+    /// were, the closest piece pair's distance and normal.
     last: Option<quick_bounds::LastQuery>,
+    /// What the last query found of each piece pair of two bodies of several pieces,
+    /// `[i * pieces_b + j]` (`quick_bounds.rs`: a compound pair's cached bound).
+    gaps: Vec<quick_bounds::SlotGap>,
 }
 
 /// One slot of the body table.
