@@ -1,6 +1,7 @@
 //! Tests of the heap keys that avoid closest-feature queries: island bodies' load envelopes
-//! (`envelope.rs`) and far pairs bounded by their spheres ([`World::far_bound`]). Each checks
-//! a key against what the bodies do, measured from outside the loop.
+//! (`envelope.rs`), far pairs bounded by their spheres ([`World::far_bound`]) and compound
+//! pairs bounded from their last query ([`World::cached_bound`]). Each checks a key against
+//! what the bodies do, measured from outside the loop, or against a fresh query's.
 
 use glam::DVec3;
 use impulse_collide::{PairCache, shape};
@@ -200,4 +201,101 @@ fn near_pairs_and_links_are_not_bounded_by_spheres() {
             .with_body(BodyDesc::new("b", ShapeDesc::cuboid([0.5; 3])).at([1.2, 0.0, 0.0])),
     );
     assert_eq!(w.far_bound((0, 1)), None);
+}
+
+/// A random fixed body of six boxes around a link (a slider on a prismatic joint, or a
+/// rod on a revolute one, moving at up to 3 m/s or 30 rad/s, no gravity), as a scene.
+fn link_beside_a_compound(rng: &mut Xoshiro256PlusPlus) -> String {
+    let mut parts = Vec::new();
+    for _ in 0..6 {
+        // A box whose centre is 0.2–1.5 m from the link's, in a random direction.
+        let at = unit(rng) * rng.random_range(0.2..1.5);
+        let half = [
+            rng.random_range(0.02..0.1),
+            rng.random_range(0.02..0.1),
+            rng.random_range(0.02..0.1),
+        ];
+        parts.push(format!(
+            "Part(shape: Box(half_extents: ({}, {}, {})), position: ({}, {}, {}))",
+            half[0], half[1], half[2], at.x, at.y, at.z
+        ));
+    }
+    let axis = unit(rng);
+    let (kind, rate, pivot) = if rng.random_bool(0.5) {
+        ("Prismatic", rng.random_range(-3.0..3.0), 0.0)
+    } else {
+        (
+            "Revolute",
+            rng.random_range(-30.0..30.0),
+            rng.random_range(-0.1..0.1),
+        )
+    };
+    format!(
+        r#"Scene(gravity: (0.0, 0.0, 0.0), collision_epsilon: 1e-3,
+    bodies: [Body(name: "bracket", motion: Fixed, shape: Compound(parts: [{}]))],
+    multibodies: [Multibody(name: "m", base: Fixed, position: (0.0, 0.0, 0.0),
+        links: [
+            Link(name: "support"),
+            Link(name: "mover", shape: Some(Box(half_extents: (0.05, 0.03, 0.02))), position: ({pivot}, 0.0, 0.0), mass: Some(Mass(1.0))),
+        ],
+        joints: [Joint(name: "j", kind: {kind}, parent: "support", child: "mover", axis: ({}, {}, {}), qd: {rate})],
+    )],
+)"#,
+        parts.join(", "),
+        axis.x,
+        axis.y,
+        axis.z
+    )
+}
+
+/// A compound pair's cached bound (`quick_bounds.rs`), asked at the instant of its query,
+/// is that query's key to the bit — every piece pair bounded along its own normal as the
+/// query bounds it, the piece pairs skipped by the bodies' direction-free coefficients
+/// (links' and fixed bodies') included: 400 random links moving beside random fixed bodies
+/// of six boxes, with and without the skip. Where the key comes from a piece pair other
+/// than the closest (a link moving fast toward a far box), a cached bound that took the
+/// closest piece pair's alone would be late.
+#[test]
+fn a_compound_pairs_cached_bound_at_its_query_is_its_key() {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(41);
+    let (mut compared, mut skipped) = (0, 0u64);
+    for case in 0..400 {
+        let text = link_beside_a_compound(&mut rng);
+        let desc = SceneDesc::from_ron(&text, "case").expect("a valid scene");
+        let Ok(w) = World::from_scene(&Scene::new(desc, ".")) else {
+            continue; // drawn overlapping
+        };
+        let bracket = w.handle("bracket").expect("named").index;
+        let link = w
+            .bodies()
+            .find(|(_, b)| b.is_link() && b.shape.pieces().len() == 1)
+            .map(|(h, _)| h.index)
+            .expect("the mover's body");
+        let pair = (bracket.min(link), bracket.max(link));
+        for skip in [true, false] {
+            let mut w = w.clone();
+            w.faults.no_free_skip = !skip;
+            // A fresh query (the world's first keys were made when it was built).
+            if let Some(state) = w.pairs.get_mut(&pair) {
+                state.last = None;
+            }
+            let queried = w.bound(pair).expect("bounded");
+            let Some(cached) = w.cached_bound(pair) else {
+                continue; // within the envelope, or a piece pair without a normal
+            };
+            assert_eq!(
+                cached.to_bits(),
+                queried.to_bits(),
+                "case {case} (skip {skip}): cached {cached} against the query's {queried}"
+            );
+            compared += 1;
+        }
+        skipped += w
+            .faults
+            .free_skips
+            .load(std::sync::atomic::Ordering::Relaxed);
+    }
+    assert!(compared > 400, "only {compared} bounds compared");
+    eprintln!("{compared} bounds compared, {skipped} piece pairs skipped");
+    assert!(skipped > 100, "only {skipped} piece pairs skipped");
 }

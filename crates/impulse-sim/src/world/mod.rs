@@ -444,6 +444,11 @@ pub(crate) struct Faults {
     pub no_clearance_bound: bool,
     /// How many times that bound ended the fast way early (shared by a world's clones).
     pub clearance_bound_exits: std::sync::Arc<std::sync::atomic::AtomicU64>,
+    /// A compound pair's cached bound computes every piece pair's bound
+    /// (`quick_bounds.rs`): none is skipped by the direction-free coefficients.
+    pub no_free_skip: bool,
+    /// How many piece pairs' bounds were skipped so (shared by a world's clones).
+    pub free_skips: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
 #[cfg(test)]
@@ -457,6 +462,8 @@ impl Default for Faults {
             pool_steps: 0,
             no_clearance_bound: false,
             clearance_bound_exits: std::sync::Arc::default(),
+            no_free_skip: false,
+            free_skips: std::sync::Arc::default(),
         }
     }
 }

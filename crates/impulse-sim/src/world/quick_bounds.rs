@@ -27,6 +27,26 @@ pub const FAR_PAIR_REL: f64 = 0.25;
 /// and one near 0 lets keys come early. Default `0.5`.
 pub const CACHED_GAP_FRACTION: f64 = 0.5;
 
+/// Relative margin by which a piece pair's target gap must exceed what both bodies'
+/// direction-free coefficients can close before the pair's bound for that piece pair's own
+/// bound to be skipped ([`World::compound_cached_tau`]): far above the rounding of the
+/// comparison, far below anything a bound is judged by. Default `1e-9`.
+pub const FREE_SKIP_MARGIN: f64 = 1e-9;
+
+/// Direction-free TOI coefficients `(A, B)` of a motion with reach `r_max`: along any unit
+/// direction its own coefficients (the ones a piece pair's bound uses, with a piece's reach
+/// up to `r_max`) are no larger. A fixed body's and a rigid body's are the schedule's
+/// ([`impulse_collide::schedule::free_coefficients`]), a link's its prediction's
+/// ([`impulse_collide::motion::LinkMotion::free_coefficients`]); any other motion: unbounded
+/// (`(∞, ∞)`, nothing skipped).
+fn free_along_any(motion: &impulse_collide::Motion, r_max: f64) -> (f64, f64) {
+    match motion {
+        impulse_collide::Motion::Link(link) => link.free_coefficients(r_max),
+        other => impulse_collide::schedule::free_coefficients(other, r_max)
+            .unwrap_or((f64::INFINITY, f64::INFINITY)),
+    }
+}
+
 /// A pair's last query, for [`World::cached_bound`]: when it was made, where both bodies were
 /// (centre and orientation of each pose), the closest piece pair's distance, its normal and
 /// its slot.
@@ -178,14 +198,14 @@ impl World {
         (ma, mb): (&impulse_collide::Motion, &impulse_collide::Motion),
     ) -> Option<f64> {
         let state = self.pairs.get(&(a, b))?;
+        let last = state.last?;
         let (ba, bb) = (self.b(a), self.b(b));
         let nb = bb.shape.pieces().len();
-        let mut tau = f64::INFINITY;
-        for (slot, gap) in state.gaps.iter().enumerate() {
-            let SlotGap::Apart(d, n) = *gap else {
+        let tau_of = |slot: usize| {
+            let SlotGap::Apart(d, n) = state.gaps[slot] else {
                 return None;
             };
-            let t = self.schedule.piece_toi(
+            Some(self.schedule.piece_toi(
                 d + shift,
                 0.0,
                 n,
@@ -198,8 +218,41 @@ impl World {
                     motion: mb,
                     reach: bb.reach[slot % nb],
                 },
-            );
-            tau = tau.min(t);
+            ))
+        };
+        // The closest piece pair first: its bound is usually the pair's.
+        let mut tau = tau_of(last.slot)?;
+        // Both bodies' direction-free coefficients: a piece pair whose target gap they
+        // cannot close before `tau` cannot bound the pair earlier along its own normal
+        // either, whose coefficients are no larger ([`free_along_any`]); its bound is skipped.
+        let (fa, fb) = (
+            free_along_any(ma, ba.max_reach()),
+            free_along_any(mb, bb.max_reach()),
+        );
+        let (qa, qb) = (fa.0 + fb.0, fa.1 + fb.1);
+        #[cfg(test)]
+        let skip_off = self.faults.no_free_skip;
+        #[cfg(not(test))]
+        let skip_off = false;
+        let free = qa >= 0.0 && qb >= 0.0 && !skip_off;
+        for (slot, gap) in state.gaps.iter().enumerate() {
+            let SlotGap::Apart(d, _) = *gap else {
+                return None;
+            };
+            if slot == last.slot {
+                continue;
+            }
+            if free {
+                let target = self.schedule.target_gap(d + shift);
+                if target >= (qa * tau * tau + qb * tau) * (1.0 + FREE_SKIP_MARGIN) {
+                    #[cfg(test)]
+                    self.faults
+                        .free_skips
+                        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    continue;
+                }
+            }
+            tau = tau.min(tau_of(slot)?);
         }
         Some(tau)
     }
