@@ -5,7 +5,7 @@ velocity coordinates of a multibody model.
 """
 
 import os
-from typing import Any, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -168,6 +168,15 @@ class World:
     ) -> None:
         """Constant force (3,) at `point` (3,, world; default the centre of mass) and torque
         (3,) about the centre of mass, world, kept until changed."""
+    def set_load_function(
+        self,
+        name: str,
+        function: Callable[[float, dict[str, _F64]], Sequence[_Vec]],
+        rate: float,
+    ) -> None:
+        """`function(t, state)` -> (force, torque) or (force, torque, point), world, called
+        every 1/rate s and held in between; `state`: `position`, `rotation`, `velocity`,
+        `angular_velocity`, `com`. Its exception is raised by `step` (world unchanged)."""
     def clear_load(self, name: str) -> None: ...
 
 # Articulated dynamics (thesis ch. 4)
