@@ -14,8 +14,8 @@ use impulse_sim::scene::{
     ShapeDesc, UrdfDesc,
 };
 use impulse_sim::{
-    BodyHandle, BodyState, ContactEvent, ContactMode, Load, Material, MultibodyOptions, Scene,
-    SimError, StepReport, World, WorldSettings,
+    BodyHandle, BodyState, ContactEvent, ContactMode, HeldContact, Load, Material,
+    MultibodyOptions, Scene, SimError, StepReport, World, WorldSettings,
 };
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
@@ -831,6 +831,51 @@ impl PyWorld {
         Ok(Array2::from_shape_vec((rows.len() / 2, 2), rows)
             .expect("two rows per pair")
             .into_pyarray(py))
+    }
+
+    /// The points of the pairs `held_pairs` lists, with the impulse the last island step gave
+    /// each (the switching model's sustained contact: thesis §5.3's contact forces as impulses
+    /// over a step), as a dict of arrays with one entry per point (k of them):
+    /// - `a`, `b` (k,) int: the rows of the pair's two bodies (a `held_pairs` row);
+    /// - `point` (k, 3): where the impulse acted (world, at the start of that step): on the
+    ///   moving body's surface against a fixed one, else midway between the two surfaces;
+    /// - `normal` (k, 3): unit normal from `a` toward `b`;
+    /// - `impulse` (k, 3): the impulse on `b` over that step (world; `a` receives its
+    ///   negative);
+    /// - `span` (k,): that step's length (s; 0 for a pair held but not stepped yet), so
+    ///   `impulse / span` is the point's mean force over it.
+    ///
+    /// Pairs in `held_pairs` order, each pair's points in its manifolds' order. A body
+    /// resting on a fixed floor has `sum(impulse[:, 2]) ≈ m·g·span`. Empty under the
+    /// `"impulse"` model.
+    fn held_contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (contacts, a, b) = self.read(py, |w| {
+            let contacts = w.held_contacts();
+            let a = Self::rows_of(w, contacts.iter().map(|c| c.bodies.0));
+            let b = Self::rows_of(w, contacts.iter().map(|c| c.bodies.1));
+            (contacts, a, b)
+        })?;
+        let d = PyDict::new(py);
+        let vectors = |f: fn(&HeldContact) -> DVec3| {
+            rows_to_array(
+                py,
+                contacts
+                    .iter()
+                    .map(|c| f(c).to_array())
+                    .collect::<Vec<_>>()
+                    .into_iter(),
+            )
+        };
+        d.set_item("a", PyArray1::from_vec(py, a))?;
+        d.set_item("b", PyArray1::from_vec(py, b))?;
+        d.set_item("point", vectors(|c| c.point))?;
+        d.set_item("normal", vectors(|c| c.normal))?;
+        d.set_item("impulse", vectors(|c| c.impulse))?;
+        d.set_item(
+            "span",
+            PyArray1::from_vec(py, contacts.iter().map(|c| c.span).collect()),
+        )?;
+        Ok(d)
     }
 
     /// Sets the pose of body `name`: `position` (3,), `rotation` quaternion (x, y, z, w).

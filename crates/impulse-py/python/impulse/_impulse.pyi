@@ -154,6 +154,10 @@ class World:
         `impulse` (on `a`), `point`, `normal` (from `b` toward `a`) (k, 3)."""
     def held_pairs(self) -> npt.NDArray[np.int64]:
         """Pairs held as constraints now (switching model), shape (p, 2) int rows."""
+    def held_contacts(self) -> dict[str, Any]:
+        """The held pairs' points, k of them: `a`, `b` (k,) int rows; `point`, `normal` (from
+        `a` toward `b`), `impulse` (on `b` over the last island step) (k, 3); `span` (k,), that
+        step's length (s)."""
     def set_pose(self, name: str, position: _Vec, rotation: _Vec) -> None: ...
     def set_velocity(self, name: str, velocity: _Vec, angular_velocity: _Vec) -> None: ...
     def apply_impulse(self, name: str, impulse: _Vec, point: _Vec) -> None: ...
