@@ -680,6 +680,17 @@ impl PyWorld {
         Ok((PyArray1::from_vec(py, q), PyArray1::from_vec(py, v)))
     }
 
+    /// The multibodies' names, in the order they were added (a scene file's order), the names
+    /// `joint_state` takes; their links are the bodies `"<multibody>/<link>"`.
+    fn multibody_names(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        self.read(py, |w| {
+            w.multibody_handles()
+                .into_iter()
+                .filter_map(|h| w.multibody_name(h).map(str::to_owned))
+                .collect()
+        })
+    }
+
     /// Sets the contact (Coulomb `friction`, Stronge `restitution`) of materials `a` and `b`.
     fn set_material_pair(
         &self,
