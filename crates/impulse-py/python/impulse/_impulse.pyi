@@ -250,8 +250,11 @@ def run_pose_shard(
     jitter: float = 1.5,
     uniform_only: bool = False,
     max_time: float = 10.0,
+    out: Optional[_Path] = None,
+    max_wall: Optional[float] = None,
 ) -> str:
-    """The study file text `impulse poses --shard K/N --out FILE` writes."""
+    """The study file text `impulse poses --shard K/N --out FILE` writes; with `out`, kept in
+    and resumed from the CLI's journal `OUT.partial`."""
 
 def merge_pose_studies(studies: Sequence[str]) -> str:
     """The text `impulse poses merge ... --out FILE` writes."""
