@@ -2,6 +2,7 @@
 byte, and a study spread over a Dask LocalCluster of two workers."""
 
 import json
+import pathlib
 
 import numpy as np
 import pytest
@@ -168,3 +169,51 @@ def test_a_finished_shard_file_is_returned_without_dropping_again(part, cli, tmp
     assert out.read_text() == fresh
     with pytest.raises(impulse.ImpulseError, match="max_wall -1"):
         impulse.run_pose_shard(part, DROPS, out=out, max_wall=-1.0)
+
+
+def test_a_killed_dask_study_rerun_does_only_the_missing_drops(part, cli_study, tmp_path):
+    from dask import distributed
+
+    from impulse.distributed import pose_study, shard_path
+
+    whole = json.loads(cli_study)
+    owned = lambda k: [o for o in whole["outcomes"] if o["index"] % 4 == k]  # noqa: E731
+
+    def killed(out, mark):
+        """The files a 4-shard study killed midway leaves: shard 0 finished, shard 1 half
+        journaled, shards 2 and 3 not started. With `mark`, one drop of each kept shard is
+        marked, to show it is read back."""
+        first = impulse.run_pose_shard(part, DROPS, seed=SEED, shard=(0, 4), threads=1,
+                                       out=shard_path(out, 0, 4))
+        kept = []
+        if mark:
+            study = json.loads(first)
+            study["outcomes"][2]["time"] = MARK
+            kept.append(study["outcomes"][2])
+            with open(shard_path(out, 0, 4), "w") as f:
+                json.dump(study, f)
+        with pytest.raises(impulse.ImpulseError, match="after 0 of 10 drops"):
+            impulse.run_pose_shard(part, DROPS, seed=SEED, shard=(1, 4),
+                                   out=shard_path(out, 1, 4), max_wall=1e-9)
+        half = [dict(o) for o in owned(1)[:5]]
+        if mark:
+            half[4]["time"] = MARK
+            kept.append(half[4])
+        append_outcomes(pathlib.Path(shard_path(out, 1, 4) + ".partial"), half)
+        return kept
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        out = tmp_path / "marked.json"
+        kept = killed(out, mark=True)
+        text = pose_study(part, DROPS, shards=4, seed=SEED, client=client, out=out)
+        marks = {o["index"]: o for o in kept}
+        assert json.loads(text) == dict(whole, outcomes=[marks.get(o["index"], o)
+                                                         for o in whole["outcomes"]])
+        out = tmp_path / "merged.json"
+        killed(out, mark=False)
+        text = pose_study(part, DROPS, shards=4, seed=SEED, client=client, out=out)
+    assert text == cli_study and out.read_text() == cli_study
+    # The shards' files and journals are gone once the study's file is written.
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["marked.json", "merged.json"]
