@@ -14,6 +14,9 @@ _Path = Union[str, "os.PathLike[str]"]
 _Vec = npt.ArrayLike
 _F64 = npt.NDArray[np.float64]
 
+__version__: str
+"""The package's version (the workspace's, as Cargo.toml gives it)."""
+
 class ImpulseError(ValueError):
     """An error of the library; the message names what is wrong and where."""
 
