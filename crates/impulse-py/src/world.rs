@@ -322,15 +322,16 @@ impl PyWorld {
                 .unwrap_or_else(PoisonError::into_inner)
                 .take()
         };
-        take();
-        let result = py.detach(|| {
+        // Cleared and read under the world's lock: another thread's call cannot take this
+        // call's exception.
+        let (result, raised) = py.detach(|| {
             let mut w = self.locked();
+            take();
             let outer = BUSY.replace(me);
             let result = f(&mut w).map_err(|e| e.to_string());
             BUSY.set(outer);
-            result
+            (result, take())
         });
-        let raised = take();
         result.map_err(|e| raised.unwrap_or_else(|| error(e)))
     }
 
