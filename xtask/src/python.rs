@@ -15,7 +15,8 @@
 //!    step: `cargo build -p impulse-cli` would resolve other features and build it again), which
 //!    many tests take as their reference.
 //!
-//! Unix paths (`bin/`); on Windows the environment's programs are under `Scripts/`.
+//! The environment's programs are under `bin/` on Unix and `Scripts/` (with `.exe`) on
+//! Windows ([`venv_program`]).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -31,15 +32,34 @@ pub const REQUIREMENTS: &str = "crates/impulse-py/requirements-ci.txt";
 /// The copy of the requirements an environment was made from, inside it.
 const STAMP: &str = "impulse-requirements.txt";
 
+/// The directory of a virtual environment's programs, relative to it, on a Windows or other
+/// host.
+fn venv_bin_dir(windows: bool) -> &'static str {
+    if windows { "Scripts" } else { "bin" }
+}
+
+/// The path of program `name` (`"python"`, `"maturin"`) of the virtual environment `venv` on
+/// a Windows (`Scripts\NAME.exe`) or other (`bin/NAME`) host; `windows`: `cfg!(windows)`
+/// (a parameter so both are tested on either).
+pub fn venv_program(venv: &Path, name: &str, windows: bool) -> PathBuf {
+    let file = if windows {
+        format!("{name}.exe")
+    } else {
+        name.to_owned()
+    };
+    venv.join(venv_bin_dir(windows)).join(file)
+}
+
 /// Runs the three steps.
 pub fn run() -> Result<()> {
     let root = workspace_root();
     let venv = root.join(VENV);
     ensure_venv(&root, &venv)?;
-    let bin = venv.join("bin");
+    let windows = cfg!(windows);
+    let bin = venv.join(venv_bin_dir(windows));
     let crate_dir = root.join("crates/impulse-py");
     run_step(
-        Command::new(bin.join("maturin"))
+        Command::new(venv_program(&venv, "maturin", windows))
             .args(["develop", "--quiet"])
             .env("VIRTUAL_ENV", &venv)
             .env("PATH", path_with(&bin))
@@ -58,10 +78,15 @@ pub fn run() -> Result<()> {
     let target =
         std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
     run_step(
-        Command::new(bin.join("python"))
+        Command::new(venv_program(&venv, "python", windows))
             .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
             .arg(crate_dir.join("tests"))
-            .env("IMPULSE_CLI", target.join("debug/impulse"))
+            .env(
+                "IMPULSE_CLI",
+                target
+                    .join("debug")
+                    .join(format!("impulse{}", std::env::consts::EXE_SUFFIX)),
+            )
             .current_dir(&root),
         "pytest crates/impulse-py/tests",
     )
@@ -79,7 +104,8 @@ fn ensure_venv(root: &Path, venv: &Path) -> Result<()> {
     let requirements = std::fs::read_to_string(&req_path)
         .map_err(|e| format!("cannot read {}: {e}", req_path.display()))?;
     let stamp = std::fs::read_to_string(venv.join(STAMP)).ok();
-    if venv.join("bin/python").is_file() && venv_is_current(stamp.as_deref(), &requirements) {
+    let python_in_venv = venv_program(venv, "python", cfg!(windows));
+    if python_in_venv.is_file() && venv_is_current(stamp.as_deref(), &requirements) {
         println!("python: reusing {VENV} (made from the same {REQUIREMENTS})");
         return Ok(());
     }
@@ -98,7 +124,7 @@ fn ensure_venv(root: &Path, venv: &Path) -> Result<()> {
         ),
     )?;
     run_step(
-        Command::new(venv.join("bin/python"))
+        Command::new(&python_in_venv)
             .args([
                 "-m",
                 "pip",
@@ -152,6 +178,26 @@ mod tests {
             req
         ));
         assert!(!venv_is_current(None, req));
+    }
+
+    #[test]
+    fn programs_are_under_bin_on_unix_and_scripts_with_exe_on_windows() {
+        let venv = Path::new("target").join("py-venv");
+        assert_eq!(
+            venv_program(&venv, "python", false),
+            venv.join("bin").join("python")
+        );
+        assert_eq!(
+            venv_program(&venv, "python", true),
+            venv.join("Scripts").join("python.exe")
+        );
+        assert_eq!(
+            venv_program(&venv, "maturin", true),
+            venv.join("Scripts").join("maturin.exe")
+        );
+        // This host's choice is the cfg's.
+        let here = venv_program(&venv, "python", cfg!(windows));
+        assert_eq!(here.ends_with("Scripts/python.exe"), cfg!(windows));
     }
 
     #[test]

@@ -4,11 +4,9 @@
 //! --out FILE` writes, byte for byte, so a study split over machines by Python
 //! (`impulse.distributed`) or by the CLI merges the same way.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use std::time::Instant;
-
-use impulse_sim::batch::{Journal, RunHooks, Shard};
+use impulse_sim::batch::Shard;
 use impulse_sim::bowling::{
     self, AlleyDesc, BIN_WIDTH, BowlingFile, Mean, ThrowOutcome, ThrowSettings,
 };
@@ -18,7 +16,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::error;
-use crate::study_file::{merge_texts, study_text};
+use crate::study_file::{Kept, Outcomes, merge_texts, run_kept, study_text};
 
 /// A study file's text read back and checked (its alley, settings and size), as `impulse
 /// bowling merge` and `--from` read a file; `k` names it in the error.
@@ -60,86 +58,6 @@ fn throw_settings(
     }
 }
 
-/// Runs the throws of `file`'s study in `shard` under the journal of `out` (`OUT.partial`, the
-/// CLI's), as `impulse bowling --out OUT` does: the throws it holds are read back and not run
-/// again, each throw is recorded as it finishes, none starts once `max_wall` seconds have
-/// passed; when the shard's throws are all done, `out` is written and the journal removed.
-/// Without `out`, nothing is kept. Returns the file with the shard's outcomes, or the reason
-/// it stopped before the end.
-fn run_journaled(
-    mut file: BowlingFile,
-    shard: Shard,
-    threads: usize,
-    out: Option<&Path>,
-    max_wall: Option<f64>,
-) -> Result<BowlingFile, String> {
-    let journal = match out {
-        Some(out) => {
-            let header = serde_json::to_value(&file).map_err(|e| e.to_string())?;
-            let header = Journal::header("impulse bowling", shard, &header)?;
-            Some(Journal::open::<ThrowOutcome>(out, &header)?)
-        }
-        None => None,
-    };
-    let (journal, mut outcomes) = match journal {
-        Some((j, before)) => (Some(j), before),
-        None => (None, Vec::new()),
-    };
-    outcomes.sort_by_key(|t| t.index);
-    outcomes.dedup_by_key(|t| t.index);
-    let before: Vec<u64> = outcomes.iter().map(|t| t.index).collect();
-    let wall = Instant::now();
-    let record = |_: u64, t: &ThrowOutcome| {
-        if let Some(j) = &journal {
-            j.record(t);
-        }
-    };
-    let hooks = RunHooks {
-        progress: &|_| {},
-        skip: &|i| before.binary_search(&i).is_ok(),
-        stop: &|| max_wall.is_some_and(|w| wall.elapsed().as_secs_f64() >= w),
-        record: &record,
-    };
-    let now = bowling::run_throws_with(
-        &file.alley,
-        &file.settings,
-        file.seed,
-        file.throws_per_kind,
-        shard,
-        threads,
-        &hooks,
-    )
-    .map_err(|e| e.to_string())?;
-    if let Some(j) = &journal {
-        j.check()?;
-    }
-    outcomes.extend(now.into_iter().map(|(_, t)| t));
-    outcomes.sort_by_key(|t| t.index);
-    let (done, mine) = (
-        outcomes.len() as u64,
-        shard.runs_of(2 * file.throws_per_kind),
-    );
-    file.outcomes = outcomes;
-    if done < mine {
-        let kept = match out {
-            Some(out) => format!(
-                "they are kept in {}: the same call runs the other {} and writes {}",
-                Journal::path_for(out).display(),
-                mine - done,
-                out.display()
-            ),
-            None => "without `out` they are not kept".to_owned(),
-        };
-        return Err(format!(
-            "stopped at the wall-time limit (max_wall), after {done} of {mine} throws; {kept}"
-        ));
-    }
-    if let Some(j) = journal {
-        j.finish(&file)?;
-    }
-    Ok(file)
-}
-
 /// Runs the throws of one shard of a bowling study (thesis §7.4) with the GIL released;
 /// returns the text of the study file, byte for byte what `impulse bowling --throws THROWS
 /// --seed SEED --shard K/N --out FILE` writes (with `shard=(0, 1)`, the whole study). The
@@ -156,6 +74,8 @@ fn run_journaled(
 /// and made again with the same arguments runs only the throws the journal does not hold —
 /// and so does `impulse bowling … --out OUT`, which reads the same journal, and the other way
 /// round. A call stopped by `max_wall` raises `ImpulseError` saying how many throws it kept.
+/// A call whose `out` already holds this shard's finished file (and no journal) returns that
+/// file without throwing again (a Dask study re-run after a kill, `impulse.distributed`).
 /// Raises `ImpulseError` for a bad shard, setting, throw count or alley file, or a journal of
 /// another study at `OUT.partial`.
 #[pyfunction]
@@ -193,6 +113,10 @@ fn run_bowling_shard(
     py.detach(|| {
         let alley = read_alley(alley.as_ref())?;
         settings.validate().map_err(|e| e.to_string())?;
+        let total = throws
+            .checked_mul(2)
+            .ok_or_else(|| format!("throws = {throws}: too many"))?;
+        let run_alley = alley.clone();
         let file = BowlingFile {
             alley,
             settings,
@@ -200,13 +124,23 @@ fn run_bowling_shard(
             throws_per_kind: throws,
             outcomes: Vec::new(),
         };
-        study_text(&run_journaled(
-            file,
+        let study = Kept {
+            command: "impulse bowling",
+            runs: "throws",
             shard,
-            threads,
-            out.as_deref(),
+            total,
+            out: out.as_deref(),
             max_wall,
-        )?)
+        };
+        let outcomes = Outcomes {
+            of: |f: &mut BowlingFile| &mut f.outcomes,
+            index: |t: &ThrowOutcome| t.index,
+        };
+        let file = run_kept(&study, file, &outcomes, |hooks| {
+            bowling::run_throws_with(&run_alley, &settings, seed, throws, shard, threads, hooks)
+                .map_err(|e| e.to_string())
+        })?;
+        study_text(&file)
     })
     .map_err(error)
 }

@@ -6,15 +6,16 @@
 //!
 //! **Owns**: the Python-facing names and call shapes of the library — exact mass properties of
 //! meshes (thesis ch. 6, `massprops`), worlds built from scene files or in code (bodies and
-//! URDF or inline multibodies) and stepped with every body's state read as one array and the
-//! last step's contacts as arrays (`world`), articulated-body dynamics of URDF
+//! URDF or inline multibodies) and stepped with every body's state read as one array, the
+//! last step's contacts and the held pairs' impulses as arrays, loads constant or computed by a
+//! Python function the simulator calls back (`world`), articulated-body dynamics of URDF
 //! models (ABA, RNEA, CRBA; thesis ch. 4, `dynamics`), pose-study shards and their merge
 //! (thesis §7.5, `poses`), bowling-study shards, their merge and binned pins felled (thesis
 //! §7.4, `bowling`), FORK⁻¹S reduced mechanisms' matrices, static response and dynamics
 //! (`reduced`); turning every library error into the Python exception
 //! [`ImpulseError`] carrying the library's message; checking array shapes and finiteness before
 //! anything reaches the library; releasing the GIL (`Python::detach`) around every call that
-//! may take long.
+//! may take long, and taking it back only to call a Python load function.
 //!
 //! **Must not know** any algorithm (each function is a thin shell over a library crate, as
 //! the CLI is), nor Dask or any scheduler: `impulse.distributed` is plain Python over the
@@ -127,6 +128,8 @@ pub(crate) fn mat3_rows(py: Python<'_>, rows: [DVec3; 3]) -> Bound<'_, PyArray2<
 #[pymodule]
 fn _impulse(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ImpulseError", m.py().get_type::<ImpulseError>())?;
+    // The crate's version, which maturin also gives the package (`dynamic = ["version"]`).
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     massprops::register(m)?;
     world::register(m)?;
     dynamics::register(m)?;

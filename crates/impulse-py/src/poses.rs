@@ -6,14 +6,14 @@
 use std::path::{Path, PathBuf};
 
 use impulse_sim::poses::{
-    self, DropSettings, PartFileDesc, PosePart as Part, StudyFile, summarize,
+    self, DropOutcome, DropSettings, PartFileDesc, PosePart as Part, StudyFile, summarize,
 };
 use impulse_sim::scene::{MassDesc, ShapeDesc};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::study_file::{merge_texts, study_text};
+use crate::study_file::{Kept, Outcomes, merge_texts, run_kept, study_text};
 use crate::world::Shape;
 use crate::{Matrix, error};
 
@@ -173,10 +173,21 @@ fn read_study(text: &str, k: usize) -> Result<StudyFile, String> {
 /// SEED --shard K/N --out FILE` writes (with `shard=(0, 1)`, the whole study). The settings
 /// are the CLI's options, with the thesis's values as defaults. `threads` (default: every
 /// core) does not change the result.
+///
+/// With `out`, the study is kept as `impulse poses --out OUT` keeps it: each finished drop in
+/// the journal `OUT.partial`, and the file written to `out` when the shard is done. A call
+/// stopped before that (by `max_wall` seconds of wall-clock time, after which no drop starts,
+/// or by a kill) and made again with the same arguments runs only the drops the journal does
+/// not hold — and so does `impulse poses … --out OUT`, which reads the same journal, and the
+/// other way round. A call stopped by `max_wall` raises `ImpulseError` saying how many drops
+/// it kept. A call whose `out` already holds this shard's finished file (and no journal)
+/// returns that file without dropping again (a Dask study re-run after a kill,
+/// `impulse.distributed`). Raises `ImpulseError` for a bad shard or setting, or a journal of
+/// another study at `OUT.partial`.
 #[pyfunction]
 #[pyo3(signature = (part, drops, seed=1, shard=(0, 1), threads=None, height=0.12,
                     exit_speed=0.05, friction=0.3, restitution=0.3, epsilon=None, jitter=1.5,
-                    uniform_only=false, max_time=10.0))]
+                    uniform_only=false, max_time=10.0, out=None, max_wall=None))]
 #[allow(clippy::too_many_arguments)] // the CLI's options as Python keywords
 fn run_pose_shard(
     py: Python<'_>,
@@ -193,6 +204,8 @@ fn run_pose_shard(
     jitter: f64,
     uniform_only: bool,
     max_time: f64,
+    out: Option<PathBuf>,
+    max_wall: Option<f64>,
 ) -> PyResult<String> {
     let shard: impulse_sim::poses::Shard =
         format!("{}/{}", shard.0, shard.1).parse().map_err(error)?;
@@ -209,21 +222,43 @@ fn run_pose_shard(
         jitter_degrees: jitter,
         max_time,
     };
+    if let Some(w) = max_wall
+        && !(w.is_finite() && w > 0.0)
+    {
+        return Err(error(format!(
+            "max_wall {w}: must be a positive number of seconds"
+        )));
+    }
     let threads =
         threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let part = &part.part;
     py.detach(|| {
         settings.validate().map_err(|e| e.to_string())?;
-        let outcomes = poses::run_drops(part, &settings, seed, drops, shard, threads, &|_| {})
-            .map_err(|e| e.to_string())?;
-        study_text(&StudyFile {
+        let file = StudyFile {
             part: part.name.clone(),
             settings,
             seed,
             drops,
             stable: StudyFile::fingerprint(part),
-            outcomes,
-        })
+            outcomes: Vec::new(),
+        };
+        let study = Kept {
+            command: "impulse poses",
+            runs: "drops",
+            shard,
+            total: drops,
+            out: out.as_deref(),
+            max_wall,
+        };
+        let outcomes = Outcomes {
+            of: |f: &mut StudyFile| &mut f.outcomes,
+            index: |d: &DropOutcome| d.index,
+        };
+        let file = run_kept(&study, file, &outcomes, |hooks| {
+            poses::run_drops_with(part, &settings, seed, drops, shard, threads, hooks)
+                .map_err(|e| e.to_string())
+        })?;
+        study_text(&file)
     })
     .map_err(error)
 }

@@ -2,9 +2,10 @@
 //! built in code, stepped with the GIL released, every body's state read as one array per
 //! quantity, the last step's contacts as arrays.
 
+use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::{Mutex, MutexGuard, PoisonError};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use glam::{DQuat, DVec3};
 use impulse_sim::contact::ContactKind;
@@ -13,8 +14,8 @@ use impulse_sim::scene::{
     ShapeDesc, UrdfDesc,
 };
 use impulse_sim::{
-    BodyHandle, ContactEvent, ContactMode, Load, Material, MultibodyOptions, Scene, SimError,
-    StepReport, World, WorldSettings,
+    BodyHandle, BodyState, ContactEvent, ContactMode, HeldContact, Load, Material,
+    MultibodyOptions, Scene, SimError, StepReport, World, WorldSettings,
 };
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
@@ -168,29 +169,170 @@ pub struct PyWorld {
     /// Where relative paths of multibodies added later (URDF files, OBJ shapes) resolve: the
     /// scene file's directory, or the `base_dir` the world was made with.
     base_dir: PathBuf,
+    /// The first exception a load function raised (or the first bad value it returned) during
+    /// the call running now: the call raises it ([`PyWorld::long`]).
+    load_error: LoadError,
+}
+
+/// Where a Python load function leaves the exception it raised, for the call that stepped the
+/// world to raise it.
+type LoadError = Arc<Mutex<Option<PyErr>>>;
+
+thread_local! {
+    /// The world this thread is running a call of (its address; 0 for none) while the call
+    /// holds the world's lock: a load function called back from inside that call that calls
+    /// the same world would wait for the lock its own caller holds.
+    static BUSY: Cell<usize> = const { Cell::new(0) };
+}
+
+/// A Python callable `function(t, state) -> (force, torque[, point])` as the library's load
+/// function of body `body` ([`World::set_load_fn`]): called with the GIL taken for the call
+/// only. An exception it raises, or a value that is not a load, goes to `stash` (the first one
+/// only) and the library gets a non-finite load, which fails the step that asked for it: the
+/// world is then restored and the call raises the stashed exception.
+fn load_function(
+    function: Py<PyAny>,
+    body: String,
+    stash: LoadError,
+) -> impl Fn(f64, &BodyState) -> Load + Send + Sync + 'static {
+    move |t, state| {
+        Python::attach(|py| match call_load(py, &function, &body, t, state) {
+            Ok(load) => load,
+            Err(e) => {
+                let note = format!(
+                    "raised by the load function of body \"{body}\" at t = {t} s; the world \
+                     is left as it was before the call"
+                );
+                // A note (Python ≥ 3.11) says where; without it the exception is unchanged.
+                let _ = e.value(py).call_method1("add_note", (note,));
+                let mut slot = stash.lock().unwrap_or_else(PoisonError::into_inner);
+                slot.get_or_insert(e);
+                Load {
+                    force: DVec3::NAN,
+                    torque: DVec3::NAN,
+                }
+            }
+        })
+    }
+}
+
+/// One call of a load function: its arguments built, its value read as a load (a force at
+/// `point` adds its moment about the centre of mass in `state`).
+fn call_load(
+    py: Python<'_>,
+    function: &Py<PyAny>,
+    body: &str,
+    t: f64,
+    state: &BodyState,
+) -> PyResult<Load> {
+    let s = PyDict::new(py);
+    s.set_item(
+        "position",
+        PyArray1::from_slice(py, &state.position.to_array()),
+    )?;
+    s.set_item(
+        "rotation",
+        PyArray1::from_slice(py, &state.rotation.to_array()),
+    )?;
+    s.set_item(
+        "velocity",
+        PyArray1::from_slice(py, &state.velocity.to_array()),
+    )?;
+    s.set_item(
+        "angular_velocity",
+        PyArray1::from_slice(py, &state.omega.to_array()),
+    )?;
+    s.set_item("com", PyArray1::from_slice(py, &state.com.to_array()))?;
+    let value = function.bind(py).call1((t, s))?;
+    let what = format!("the load function of body \"{body}\"");
+    let bad = || {
+        error(format!(
+            "{what} returned {}: expected a tuple (force, torque) or (force, torque, point) \
+             of three numbers each",
+            value
+                .repr()
+                .map_or_else(|_| "a value".to_owned(), |r| r.to_string())
+        ))
+    };
+    let items: Vec<Bound<'_, PyAny>> = value.extract().map_err(|_| bad())?;
+    if !(2..=3).contains(&items.len()) {
+        return Err(bad());
+    }
+    let part = |k: usize, name: &str| -> PyResult<DVec3> {
+        let v: Vector<'_> = items[k].extract().map_err(|_| bad())?;
+        Ok(DVec3::from_array(vec3(&format!("{what}: {name}"), &v)?))
+    };
+    let (force, torque) = (part(0, "force")?, part(1, "torque")?);
+    let mut load = Load { force, torque };
+    if items.len() == 3 {
+        load.torque += Load::force_at(force, part(2, "point")?, state.com).torque;
+    }
+    Ok(load)
 }
 
 impl PyWorld {
+    /// A world ready for Python.
+    fn wrap(world: World, mode: ContactMode, base_dir: PathBuf) -> Self {
+        Self {
+            world: Mutex::new(world),
+            mode,
+            base_dir,
+            load_error: LoadError::default(),
+        }
+    }
+
+    /// An error for a call made from inside a call of this same world (a load function calling
+    /// its world), which would wait forever for the lock its caller holds.
+    fn refuse_reentry(&self) -> PyResult<()> {
+        if BUSY.get() == std::ptr::from_ref(self) as usize {
+            return Err(error(
+                "this world is being stepped: a load function cannot call its own world (it is \
+                 given the time and its body's state)",
+            ));
+        }
+        Ok(())
+    }
+
     /// The world, locked, for a short read (waits without the GIL if another thread holds it).
-    fn read<T: Send>(&self, py: Python<'_>, f: impl FnOnce(&mut World) -> T + Send) -> T {
-        match self.world.try_lock() {
+    fn read<T: Send>(&self, py: Python<'_>, f: impl FnOnce(&mut World) -> T + Send) -> PyResult<T> {
+        self.refuse_reentry()?;
+        Ok(match self.world.try_lock() {
             Ok(mut w) => f(&mut w),
             Err(_) => py.detach(|| f(&mut self.locked())),
-        }
+        })
     }
 
     fn locked(&self) -> MutexGuard<'_, World> {
         self.world.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
-    /// Runs a long call with the GIL released.
+    /// Runs a long call with the GIL released. A load function it calls back takes the GIL
+    /// for that call only; an exception one raised fails the call (the library restores the
+    /// world) and is raised here, in place of the library's error.
     fn long<T: Send>(
         &self,
         py: Python<'_>,
         f: impl FnOnce(&mut World) -> Result<T, SimError> + Send,
     ) -> PyResult<T> {
-        py.detach(|| f(&mut self.locked()).map_err(|e| e.to_string()))
-            .map_err(error)
+        self.refuse_reentry()?;
+        let me = std::ptr::from_ref(self) as usize;
+        let take = || {
+            self.load_error
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .take()
+        };
+        // Cleared and read under the world's lock: another thread's call cannot take this
+        // call's exception.
+        let (result, raised) = py.detach(|| {
+            let mut w = self.locked();
+            take();
+            let outer = BUSY.replace(me);
+            let result = f(&mut w).map_err(|e| e.to_string());
+            BUSY.set(outer);
+            (result, take())
+        });
+        result.map_err(|e| raised.unwrap_or_else(|| error(e)))
     }
 
     /// The handle of the body called `name`.
@@ -241,10 +383,10 @@ impl PyWorld {
         &self,
         py: Python<'py>,
         f: impl Fn(&impulse_sim::BodyState) -> [f64; K] + Send + Sync,
-    ) -> Bound<'py, PyArray2<f64>> {
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let flat: Vec<[f64; K]> =
-            self.read(py, |w| w.bodies().map(|(_, b)| f(&b.state())).collect());
-        rows_to_array(py, flat.into_iter())
+            self.read(py, |w| w.bodies().map(|(_, b)| f(&b.state())).collect())?;
+        Ok(rows_to_array(py, flat.into_iter()))
     }
 }
 
@@ -343,11 +485,11 @@ impl PyWorld {
             settings.base_dir = dir;
         }
         let base_dir = settings.base_dir.clone();
-        Ok(Self {
-            world: Mutex::new(World::new(settings).map_err(error)?),
+        Ok(Self::wrap(
+            World::new(settings).map_err(error)?,
             mode,
             base_dir,
-        })
+        ))
     }
 
     /// A world built from a scene file (RON; see `fixtures/scenes/`), as `impulse run` builds
@@ -368,11 +510,7 @@ impl PyWorld {
                 Ok::<_, SimError>((world, scene.desc.contact_model, scene.base_dir))
             })
             .map_err(error)?;
-        Ok(Self {
-            world: Mutex::new(world),
-            mode,
-            base_dir,
-        })
+        Ok(Self::wrap(world, mode, base_dir))
     }
 
     /// Adds a body; returns its row in the state arrays.
@@ -538,9 +676,20 @@ impl PyWorld {
                 })?;
                 let sim = w.multibody(h).expect("a handle of the world");
                 Ok::<_, String>((sim.q().to_vec(), sim.v().to_vec()))
-            })
+            })?
             .map_err(error)?;
         Ok((PyArray1::from_vec(py, q), PyArray1::from_vec(py, v)))
+    }
+
+    /// The multibodies' names, in the order they were added (a scene file's order), the names
+    /// `joint_state` takes; their links are the bodies `"<multibody>/<link>"`.
+    fn multibody_names(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        self.read(py, |w| {
+            w.multibody_handles()
+                .into_iter()
+                .filter_map(|h| w.multibody_name(h).map(str::to_owned))
+                .collect()
+        })
     }
 
     /// Sets the contact (Coulomb `friction`, Stronge `restitution`) of materials `a` and `b`.
@@ -579,7 +728,7 @@ impl PyWorld {
 
     /// The simulated time (s).
     #[getter]
-    fn time(&self, py: Python<'_>) -> f64 {
+    fn time(&self, py: Python<'_>) -> PyResult<f64> {
         self.read(py, |w| w.time())
     }
 
@@ -593,45 +742,45 @@ impl PyWorld {
     }
 
     /// Number of bodies.
-    fn __len__(&self, py: Python<'_>) -> usize {
+    fn __len__(&self, py: Python<'_>) -> PyResult<usize> {
         self.read(py, |w| w.len())
     }
 
     /// The bodies' names, in row order.
-    fn names(&self, py: Python<'_>) -> Vec<String> {
+    fn names(&self, py: Python<'_>) -> PyResult<Vec<String>> {
         self.read(py, |w| w.bodies().map(|(_, b)| b.name.clone()).collect())
     }
 
     /// Positions of the bodies' own frames (the position given, moved by the motion), shape
     /// (n, 3).
-    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         self.rows(py, |s| s.position.to_array())
     }
 
     /// Orientations of the bodies' own frames as quaternions (x, y, z, w), shape (n, 4).
-    fn orientations<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn orientations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         self.rows(py, |s| s.rotation.to_array())
     }
 
     /// Velocities of the centres of mass, shape (n, 3).
-    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         self.rows(py, |s| s.velocity.to_array())
     }
 
     /// Angular velocities (world), shape (n, 3).
-    fn angular_velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn angular_velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         self.rows(py, |s| s.omega.to_array())
     }
 
     /// Centres of mass (world), shape (n, 3).
-    fn centres_of_mass<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn centres_of_mass<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         self.rows(py, |s| s.com.to_array())
     }
 
     /// Every body's state in one call, shape (n, 16): position (3), quaternion x, y, z, w
     /// (4), velocity (3), angular velocity (3), centre of mass (3) — the columns of `impulse
     /// run --out` after `time, body`.
-    fn states<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn states<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         self.rows(py, |s| {
             let mut r = [0.0; 16];
             r[0..3].copy_from_slice(&s.position.to_array());
@@ -644,7 +793,7 @@ impl PyWorld {
     }
 
     /// Total kinetic energy of the dynamic bodies and multibodies.
-    fn kinetic_energy(&self, py: Python<'_>) -> f64 {
+    fn kinetic_energy(&self, py: Python<'_>) -> PyResult<f64> {
         self.read(py, |w| w.kinetic_energy())
     }
 
@@ -673,7 +822,7 @@ impl PyWorld {
             let a = Self::rows_of(w, events.iter().map(|e| e.a));
             let b = Self::rows_of(w, events.iter().map(|e| e.b));
             (events, a, b)
-        });
+        })?;
         impacts_dict(py, &events, a, b)
     }
 
@@ -681,7 +830,7 @@ impl PyWorld {
     /// (resting and sliding contact, solved in island steps), shape (p, 2) int: the rows of
     /// the two bodies (in `names()` order), in ascending order. Empty under the `"impulse"`
     /// model, where every contact is a collision or microcollision (`impacts`).
-    fn held_pairs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+    fn held_pairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
         let rows = self.read(py, |w| {
             let pairs = w.held_pairs();
             let a = Self::rows_of(w, pairs.iter().map(|p| p.0));
@@ -690,10 +839,55 @@ impl PyWorld {
                 .zip(b)
                 .flat_map(|(a, b)| [a, b])
                 .collect::<Vec<_>>()
-        });
-        Array2::from_shape_vec((rows.len() / 2, 2), rows)
+        })?;
+        Ok(Array2::from_shape_vec((rows.len() / 2, 2), rows)
             .expect("two rows per pair")
-            .into_pyarray(py)
+            .into_pyarray(py))
+    }
+
+    /// The points of the pairs `held_pairs` lists, with the impulse the last island step gave
+    /// each (the switching model's sustained contact: thesis §5.3's contact forces as impulses
+    /// over a step), as a dict of arrays with one entry per point (k of them):
+    /// - `a`, `b` (k,) int: the rows of the pair's two bodies (a `held_pairs` row);
+    /// - `point` (k, 3): where the impulse acted (world, at the start of that step): on the
+    ///   moving body's surface against a fixed one, else midway between the two surfaces;
+    /// - `normal` (k, 3): unit normal from `a` toward `b`;
+    /// - `impulse` (k, 3): the impulse on `b` over that step (world; `a` receives its
+    ///   negative);
+    /// - `span` (k,): that step's length (s; 0 for a pair held but not stepped yet), so
+    ///   `impulse / span` is the point's mean force over it.
+    ///
+    /// Pairs in `held_pairs` order, each pair's points in its manifolds' order. A body
+    /// resting on a fixed floor has `sum(impulse[:, 2]) ≈ m·g·span`. Empty under the
+    /// `"impulse"` model.
+    fn held_contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (contacts, a, b) = self.read(py, |w| {
+            let contacts = w.held_contacts();
+            let a = Self::rows_of(w, contacts.iter().map(|c| c.bodies.0));
+            let b = Self::rows_of(w, contacts.iter().map(|c| c.bodies.1));
+            (contacts, a, b)
+        })?;
+        let d = PyDict::new(py);
+        let vectors = |f: fn(&HeldContact) -> DVec3| {
+            rows_to_array(
+                py,
+                contacts
+                    .iter()
+                    .map(|c| f(c).to_array())
+                    .collect::<Vec<_>>()
+                    .into_iter(),
+            )
+        };
+        d.set_item("a", PyArray1::from_vec(py, a))?;
+        d.set_item("b", PyArray1::from_vec(py, b))?;
+        d.set_item("point", vectors(|c| c.point))?;
+        d.set_item("normal", vectors(|c| c.normal))?;
+        d.set_item("impulse", vectors(|c| c.impulse))?;
+        d.set_item(
+            "span",
+            PyArray1::from_vec(py, contacts.iter().map(|c| c.span).collect()),
+        )?;
+        Ok(d)
     }
 
     /// Sets the pose of body `name`: `position` (3,), `rotation` quaternion (x, y, z, w).
@@ -781,14 +975,45 @@ impl PyWorld {
         })
     }
 
-    /// Removes any load from body `name` (`set_force`, `set_load`).
+    /// Sets a load function on dynamic body `name`, replacing any load: the simulator calls
+    /// `function(t, state)` now and then every `1/rate` seconds of simulated time (`rate` in
+    /// Hz, finite and > 0), and holds the load it returns constant until the next call, as
+    /// `set_load` holds one (exactly integrated in between; a zero-order hold, so a spring or a
+    /// damper is followed to O(1/rate)). `state` is a dict of float64 arrays: `position` (3,),
+    /// `rotation` (4,, quaternion x, y, z, w), `velocity` (3,, of the centre of mass),
+    /// `angular_velocity` (3,), `com` (3,); `function` returns `(force, torque)` or `(force,
+    /// torque, point)`, each 3 numbers, world (a force at `point` adds its moment about the
+    /// centre of mass at that instant). Steps keep the GIL released and take it only to call
+    /// `function`. An exception `function` raises (or a value that is not a finite load, as
+    /// `ImpulseError`) fails the `step` that called it: the step raises that exception,
+    /// with a note naming the body and time, and the world is left as it was before the step.
+    /// `function` may not call this world (it raises `ImpulseError`). `clear_load` or
+    /// `set_load` removes it.
+    fn set_load_function(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        function: Bound<'_, PyAny>,
+        rate: f64,
+    ) -> PyResult<()> {
+        if !function.is_callable() {
+            return Err(error(format!(
+                "function: {} is not callable",
+                function.repr()?
+            )));
+        }
+        let f = load_function(function.unbind(), name.to_owned(), self.load_error.clone());
+        self.long(py, |w| w.set_load_fn(Self::handle(w, name)?, rate, f))
+    }
+
+    /// Removes any load from body `name` (`set_force`, `set_load`, `set_load_function`).
     fn clear_load(&self, py: Python<'_>, name: &str) -> PyResult<()> {
         self.long(py, |w| w.clear_load(Self::handle(w, name)?))
     }
 
-    fn __repr__(&self, py: Python<'_>) -> String {
-        let (n, t) = self.read(py, |w| (w.len(), w.time()));
-        format!("World({n} bodies, t = {t})")
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let (n, t) = self.read(py, |w| (w.len(), w.time()))?;
+        Ok(format!("World({n} bodies, t = {t})"))
     }
 }
 

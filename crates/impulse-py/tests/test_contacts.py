@@ -1,6 +1,7 @@
 """Contacts of the last step from Python: a ball dropped on the floor against the closed forms
 of a free fall and a Newton impact, microcollisions against the momentum balance of a resting
-box, held pairs against what rests and what flies."""
+box, held pairs against what rests and what flies, and the held pairs' impulses against the
+weight they carry."""
 
 import math
 
@@ -114,3 +115,51 @@ def test_held_pairs_are_the_resting_contacts():
     w2.add_body("box", impulse.Shape.box([0.05, 0.05, 0.05]), position=[0, 0, 0.05])
     w2.step(0.1)
     assert w2.held_pairs().shape == (0, 2) and len(w2.impacts()["time"]) > 0
+
+
+# A held contact's impulses carry the weight at rest to within this fraction (the solver stops
+# at its speed tolerance; the stabilisation's pull on a drifted gap adds a little).
+STATIC_REL = 1e-4
+HALF = 0.05  # the box's half extent
+EPS_C = 1e-4  # the world's collision epsilon: the points lie within it of the corners
+UNIT = 1e-12  # a normal is a unit vector to rounding
+
+
+@pytest.mark.parametrize("spin", [0.0, 0.7])
+def test_a_resting_box_s_held_impulses_carry_m_g_at_its_bottom_corners(spin):
+    w = impulse.World(collision_epsilon=EPS_C, gravity=[0, 0, -G])
+    w.add_body("floor", impulse.Shape.box([1.0, 1.0, 0.1]), position=[0, 0, -0.1], fixed=True)
+    # Turned about z by `spin` (rad), so its corners are not on the world's axes.
+    q = [0, 0, math.sin(spin / 2), math.cos(spin / 2)]
+    w.add_body("box", impulse.Shape.box([HALF] * 3), position=[0.1, -0.2, HALF], rotation=q,
+               mass=M)
+    w.step(0.3)
+    hc = w.held_contacts()
+    np.testing.assert_array_equal(w.held_pairs(), [[0, 1]])
+    assert len(hc["a"]) == 4  # a face on a face: four corners
+    np.testing.assert_array_equal(hc["a"], 0)
+    np.testing.assert_array_equal(hc["b"], 1)
+    span = hc["span"][0]
+    assert span > 0 and np.all(hc["span"] == span)
+    # Static equilibrium over the step: the impulses on the box sum to m g span, straight up,
+    # and their moment about its centre of mass vanishes.
+    weight = M * G * span
+    np.testing.assert_allclose(hc["impulse"].sum(0), [0, 0, weight], rtol=0,
+                               atol=STATIC_REL * weight)
+    com = w.centres_of_mass()[1]
+    moment = np.cross(hc["point"] - com, hc["impulse"]).sum(0)
+    np.testing.assert_allclose(moment, 0, atol=STATIC_REL * weight * HALF)
+    np.testing.assert_allclose(hc["normal"], [[0, 0, 1]] * 4, rtol=0, atol=UNIT)
+    # The points are the bottom face's corners (the box's own frame, turned back by -spin).
+    c, s = math.cos(spin), math.sin(spin)
+    local = (hc["point"] - com) @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    corners = {(int(np.sign(x)), int(np.sign(y))) for x, y, _ in local}
+    assert corners == {(-1, -1), (-1, 1), (1, -1), (1, 1)}
+    np.testing.assert_allclose(np.abs(local), [[HALF, HALF, HALF]] * 4, rtol=0, atol=EPS_C)
+    # The impulse model holds nothing.
+    w2 = impulse.World(collision_epsilon=EPS_C, gravity=[0, 0, -G], contact_model="impulse")
+    w2.add_body("floor", impulse.Shape.box([1.0, 1.0, 0.1]), position=[0, 0, -0.1], fixed=True)
+    w2.add_body("box", impulse.Shape.box([HALF] * 3), position=[0, 0, HALF], mass=M)
+    w2.step(0.1)
+    hc2 = w2.held_contacts()
+    assert hc2["point"].shape == (0, 3) and hc2["span"].shape == (0,)

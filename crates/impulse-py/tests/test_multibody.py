@@ -64,6 +64,7 @@ def test_the_urdf_arm_scene_built_in_code_runs_bit_for_bit(root):
     b = impulse.World.from_scene(root / "fixtures/scenes/urdf-arm.ron")
     assert a.names() == b.names() == ["floor", "block1", "block2", "ball", "arm/pedestal",
                                       "arm/upper", "arm/forearm", "arm/hand"]
+    assert a.multibody_names() == b.multibody_names() == ["arm"]  # the scene file's
     q, v = a.joint_state("arm")
     np.testing.assert_array_equal(q, [0.0, 0.3])  # shoulder, elbow as the scene sets them
     np.testing.assert_array_equal(v, [0.0, 0.0])
@@ -153,6 +154,7 @@ def test_a_floating_urdf_robot_added_by_keywords_equals_its_scene_file(tmp_path)
 
 def test_bad_multibodies_are_refused_with_the_librarys_message(root, tmp_path):
     w = impulse.World(base_dir=root / "fixtures/scenes")
+    assert w.multibody_names() == []
     with pytest.raises(impulse.ImpulseError, match=r"multibody: .*1:"):
         w.add_multibody("Multibody(name: \"x\", links: [Blob])")
     with pytest.raises(impulse.ImpulseError, match="nowhere.urdf"):
@@ -170,3 +172,7 @@ def test_bad_multibodies_are_refused_with_the_librarys_message(root, tmp_path):
     with pytest.raises(impulse.ImpulseError, match='multibody "leg": no multibody'):
         w.joint_state("leg")
     assert len(w) == 4  # only the one arm's links, nothing of the refused ones
+    assert w.multibody_names() == ["arm"]
+    w.add_urdf("second", urdf, position=[2, 0, 0])
+    assert w.multibody_names() == ["arm", "second"]  # in the order they were added
+    assert w.joint_state("second")[0].shape == (2,)

@@ -1,7 +1,11 @@
-"""The Python examples of the READMEs run as written (from the workspace root)."""
+"""The Python examples of the READMEs run as written (from the workspace root), and the
+version the README's install check prints is the workspace's."""
 
+import importlib.metadata
 import os
 import re
+import subprocess
+import sys
 
 import pytest
 
@@ -28,3 +32,17 @@ def test_the_readme_examples_run(root, readme):
         # The bowling example's 2 + 2 throws, merged from its two shards; 40 cm in 5 mm bins.
         assert scope["bins"]["mean"].shape == (80, 2)
         assert scope["bins"]["throws"] == 4
+
+
+def test_the_install_check_prints_the_workspace_version(root):
+    # The README's line after `pip install`, run as written.
+    line = re.search(r'^(python -c "import impulse; print\(impulse.__version__\)")$',
+                     (root / "README.md").read_text(), flags=re.M)
+    assert line, "README.md has no install check line"
+    code = line.group(1).split('"')[1]
+    printed = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                             text=True).stdout.strip()
+    # The workspace's version, read from Cargo.toml, and the installed distribution's.
+    cargo = re.search(r'^\[workspace\.package\][^\[]*?^version = "([^"]+)"',
+                      (root / "Cargo.toml").read_text(), flags=re.M | re.S)
+    assert printed == cargo.group(1) == importlib.metadata.version("impulse")

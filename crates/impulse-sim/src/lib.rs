@@ -76,8 +76,8 @@ pub use scene::{Scene, SceneDesc};
 pub use sustained::{ContactMode, SustainedSettings};
 pub use world::{
     BodyHandle, BodyState, ContactEvent, ContactFailure, Control, ControllerHandle, Counters,
-    LinkShape, Load, LoadFn, Material, MultibodyHandle, MultibodyOptions, Profile, StepReport,
-    World, WorldController, WorldSettings,
+    HeldContact, LinkShape, Load, LoadFn, Material, MultibodyHandle, MultibodyOptions, Profile,
+    StepReport, World, WorldController, WorldSettings,
 };
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ library's message, which names what is wrong and where.
 
 - :func:`mass_properties`, :func:`mass_properties_obj`: exact mass properties (thesis ch. 6);
 - :class:`World`, :class:`Shape`: worlds from scene files or built in code, stepped, read as
-  arrays (thesis ch. 1-3, 7);
+  arrays, pushed by loads and by Python load functions (thesis ch. 1-3, 7);
 - :class:`Model`, :func:`aba`, :func:`rnea`, :func:`crba`: articulated dynamics of URDF
   models (thesis ch. 4);
 - :class:`PosePart`, :func:`run_pose_shard`, :func:`merge_pose_studies`,
@@ -25,6 +25,7 @@ library's message, which names what is wrong and where.
 
 from ._impulse import (
     ImpulseError,
+    __version__,
     MassProperties,
     Model,
     PosePart,
@@ -48,6 +49,7 @@ from ._impulse import (
 )
 
 __all__ = [
+    "__version__",
     "ImpulseError",
     "MassProperties",
     "Model",

@@ -5,7 +5,7 @@ velocity coordinates of a multibody model.
 """
 
 import os
-from typing import Any, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -13,6 +13,9 @@ import numpy.typing as npt
 _Path = Union[str, "os.PathLike[str]"]
 _Vec = npt.ArrayLike
 _F64 = npt.NDArray[np.float64]
+
+__version__: str
+"""The package's version (the workspace's, as Cargo.toml gives it)."""
 
 class ImpulseError(ValueError):
     """An error of the library; the message names what is wrong and where."""
@@ -124,6 +127,8 @@ class World:
         """A URDF robot as multibody `name`; q, qd by joint name; returns its links' rows."""
     def joint_state(self, name: str) -> Tuple[_F64, _F64]:
         """Multibody `name`'s q (nq,) and v (nv,)."""
+    def multibody_names(self) -> list[str]:
+        """The multibodies' names, in the order they were added."""
     def set_material_pair(self, a: str, b: str, friction: float, restitution: float) -> None: ...
     def step(self, dt: float) -> dict[str, Any]: ...
     def step_until(self, t: float) -> dict[str, Any]: ...
@@ -154,6 +159,10 @@ class World:
         `impulse` (on `a`), `point`, `normal` (from `b` toward `a`) (k, 3)."""
     def held_pairs(self) -> npt.NDArray[np.int64]:
         """Pairs held as constraints now (switching model), shape (p, 2) int rows."""
+    def held_contacts(self) -> dict[str, Any]:
+        """The held pairs' points, k of them: `a`, `b` (k,) int rows; `point`, `normal` (from
+        `a` toward `b`), `impulse` (on `b` over the last island step) (k, 3); `span` (k,), that
+        step's length (s)."""
     def set_pose(self, name: str, position: _Vec, rotation: _Vec) -> None: ...
     def set_velocity(self, name: str, velocity: _Vec, angular_velocity: _Vec) -> None: ...
     def apply_impulse(self, name: str, impulse: _Vec, point: _Vec) -> None: ...
@@ -168,6 +177,15 @@ class World:
     ) -> None:
         """Constant force (3,) at `point` (3,, world; default the centre of mass) and torque
         (3,) about the centre of mass, world, kept until changed."""
+    def set_load_function(
+        self,
+        name: str,
+        function: Callable[[float, dict[str, _F64]], Sequence[_Vec]],
+        rate: float,
+    ) -> None:
+        """`function(t, state)` -> (force, torque) or (force, torque, point), world, called
+        every 1/rate s and held in between; `state`: `position`, `rotation`, `velocity`,
+        `angular_velocity`, `com`. Its exception is raised by `step` (world unchanged)."""
     def clear_load(self, name: str) -> None: ...
 
 # Articulated dynamics (thesis ch. 4)
@@ -235,8 +253,11 @@ def run_pose_shard(
     jitter: float = 1.5,
     uniform_only: bool = False,
     max_time: float = 10.0,
+    out: Optional[_Path] = None,
+    max_wall: Optional[float] = None,
 ) -> str:
-    """The study file text `impulse poses --shard K/N --out FILE` writes."""
+    """The study file text `impulse poses --shard K/N --out FILE` writes; with `out`, kept in
+    and resumed from the CLI's journal `OUT.partial`."""
 
 def merge_pose_studies(studies: Sequence[str]) -> str:
     """The text `impulse poses merge ... --out FILE` writes."""

@@ -28,6 +28,13 @@ file ``impulse bowling --throws THROWS --seed SEED --out FILE`` writes on one ma
         text = bowling_study(throws=320, shards=16, client=client)
     bins = impulse.bowling_summary(text)
 
+With ``out``, each shard keeps its drops as ``impulse poses --shard K/N --out`` keeps them: in
+the file ``OUT.shard-K-of-N`` and, while it runs, its journal ``OUT.shard-K-of-N.partial``. A
+study whose cluster was killed, run again with the same arguments and ``out``, does only the
+drops (or throws) no shard had finished: a shard whose file is written returns it, a shard
+with a journal runs only the drops it lacks. The shard files are removed once ``out`` is
+written. Workers write them, so ``out`` must be on a file system every worker sees.
+
 Without Dask, the same shards run as a Slurm job array of ``impulse poses --shard K/N`` and
 ``impulse poses merge`` (the README's "impulse poses" section has the script), or of
 ``impulse bowling --shard K/N`` and ``impulse bowling merge``.
@@ -42,7 +49,25 @@ from typing import Any, Optional, Union
 
 from . import _impulse
 
-__all__ = ["bowling_study", "bowling_study_graph", "pose_study", "pose_study_graph"]
+__all__ = [
+    "bowling_study",
+    "bowling_study_graph",
+    "pose_study",
+    "pose_study_graph",
+    "shard_path",
+]
+
+_PathLike = Union[str, "os.PathLike[str]"]
+
+
+def shard_path(out: _PathLike, k: int, shards: int) -> str:
+    """The file (absolute) in which shard ``k`` of ``shards`` of a study written to ``out`` is kept:
+    ``OUT.shard-K-of-N`` (its journal is that name with ``.partial`` added)."""
+    return f"{os.path.abspath(os.fspath(out))}.shard-{k}-of-{shards}"
+
+
+def _shard_outs(out: Optional[_PathLike], shards: int) -> list:
+    return [None if out is None else shard_path(out, k, shards) for k in range(shards)]
 
 
 def pose_study_graph(
@@ -52,15 +77,18 @@ def pose_study_graph(
     *,
     seed: int = 1,
     threads_per_shard: int = 1,
+    out: Optional[_PathLike] = None,
     **settings: Any,
 ):
     """The study as a Dask graph: a ``dask.delayed`` object whose value is the merged file text.
 
     One task per shard (``impulse.run_pose_shard(part, drops, seed=seed, shard=(k, shards),
-    threads=threads_per_shard, **settings)``) and one merge task. ``settings`` are the drop
-    settings of :func:`impulse.run_pose_shard` (``height``, ``exit_speed``, ``friction``,
-    ``restitution``, ``epsilon``, ``jitter``, ``uniform_only``, ``max_time``). The part is
-    shipped to the workers pickled (by its file path, which must be readable there, or by its
+    threads=threads_per_shard, out=shard_path(out, k, shards), **settings)``) and one merge
+    task. ``settings`` are the drop settings of :func:`impulse.run_pose_shard` (``height``,
+    ``exit_speed``, ``friction``, ``restitution``, ``epsilon``, ``jitter``, ``uniform_only``,
+    ``max_time``). With ``out``, each shard is kept in its file (:func:`shard_path`) and a
+    graph computed again resumes the shards; nothing writes ``out`` itself. The part is shipped
+    to the workers pickled (by its file path, which must be readable there, or by its
     description). Compute it with any Dask scheduler.
     """
     import dask
@@ -76,9 +104,10 @@ def pose_study_graph(
             seed=seed,
             shard=(k, shards),
             threads=threads_per_shard,
+            out=kept,
             **settings,
         )
-        for k in range(shards)
+        for k, kept in enumerate(_shard_outs(out, shards))
     ]
     return dask.delayed(_impulse.merge_pose_studies, pure=True)(parts)
 
@@ -89,9 +118,10 @@ def _shards_checked(shards: Any) -> int:
     return shards
 
 
-def _compute(graph: Any, client: Optional[Any], out: Optional[Union[str, os.PathLike]]) -> str:
+def _compute(graph: Any, client: Optional[Any], out: Optional[_PathLike], shards: int) -> str:
     """The graph's value on ``client`` (default: the current client, else Dask's default
-    scheduler), also written to ``out`` if given, as the CLI's ``--out`` writes it."""
+    scheduler), also written to ``out`` if given, as the CLI's ``--out`` writes it; then the
+    shards' files (:func:`shard_path`) are removed."""
     if client is None:
         try:
             from dask.distributed import get_client
@@ -103,6 +133,9 @@ def _compute(graph: Any, client: Optional[Any], out: Optional[Union[str, os.Path
     if out is not None:
         with open(out, "w", encoding="utf-8", newline="\n") as f:
             f.write(text)
+        for kept in _shard_outs(out, shards):
+            if os.path.exists(kept):
+                os.remove(kept)
     return text
 
 
@@ -114,22 +147,23 @@ def pose_study(
     client: Optional[Any] = None,
     seed: int = 1,
     threads_per_shard: int = 1,
-    out: Optional[Union[str, os.PathLike]] = None,
+    out: Optional[_PathLike] = None,
     **settings: Any,
 ) -> str:
     """Runs a pose study as ``shards`` Dask tasks and returns the merged study file's text.
 
     ``client``: a ``dask.distributed.Client`` (default: the current client if there is one,
     else Dask's default scheduler). ``out``: also write the text to this file, as ``impulse
-    poses --out`` does. The text equals, byte for byte, the file of the same study run in one
+    poses --out`` does, and keep each shard's drops on the way (:func:`shard_path`), so that
+    the same call made again after a kill runs only the drops not yet done. The text equals, byte for byte, the file of the same study run in one
     process (``impulse.run_pose_shard(part, drops, seed=seed)``) or by ``impulse poses``.
     Read the estimates with :func:`impulse.pose_summary`. A failed shard raises its
     :class:`impulse.ImpulseError` here.
     """
     graph = pose_study_graph(
-        part, drops, shards, seed=seed, threads_per_shard=threads_per_shard, **settings
+        part, drops, shards, seed=seed, threads_per_shard=threads_per_shard, out=out, **settings
     )
-    return _compute(graph, client, out)
+    return _compute(graph, client, out, shards)
 
 
 def bowling_study_graph(
@@ -138,13 +172,15 @@ def bowling_study_graph(
     *,
     seed: int = 1,
     threads_per_shard: int = 1,
+    out: Optional[_PathLike] = None,
     **settings: Any,
 ):
     """The bowling study as a Dask graph: a ``dask.delayed`` whose value is the merged file text.
 
     One task per shard (``impulse.run_bowling_shard(throws, seed=seed, shard=(k, shards),
-    threads=threads_per_shard, **settings)``) and one merge task
-    (:func:`impulse.merge_bowling_studies`). ``settings`` are the keywords of
+    threads=threads_per_shard, out=shard_path(out, k, shards), **settings)``) and one merge
+    task (:func:`impulse.merge_bowling_studies`). With ``out``, shards are kept and resumed as
+    in :func:`pose_study_graph`. ``settings`` are the keywords of
     :func:`impulse.run_bowling_shard` (``speed``, ``spin``, ``angle``, ``center``, ``width``,
     ``settle``, ``alley``: an alley file's path, which must be readable on the workers).
     Compute it with any Dask scheduler.
@@ -158,8 +194,8 @@ def bowling_study_graph(
         )
     run = dask.delayed(_impulse.run_bowling_shard, pure=True)
     parts = [
-        run(throws, seed=seed, shard=(k, shards), threads=threads_per_shard, **settings)
-        for k in range(shards)
+        run(throws, seed=seed, shard=(k, shards), threads=threads_per_shard, out=kept, **settings)
+        for k, kept in enumerate(_shard_outs(out, shards))
     ]
     return dask.delayed(_impulse.merge_bowling_studies, pure=True)(parts)
 
@@ -171,7 +207,7 @@ def bowling_study(
     client: Optional[Any] = None,
     seed: int = 1,
     threads_per_shard: int = 1,
-    out: Optional[Union[str, os.PathLike]] = None,
+    out: Optional[_PathLike] = None,
     **settings: Any,
 ) -> str:
     """Runs a bowling study (thesis §7.4) as ``shards`` Dask tasks; returns the merged file's text.
@@ -179,13 +215,15 @@ def bowling_study(
     ``throws`` of each kind (straight and hook) in the whole study; ``settings`` as
     :func:`impulse.run_bowling_shard`'s keywords. ``client``: a ``dask.distributed.Client``
     (default: the current client if there is one, else Dask's default scheduler). ``out``: also
-    write the text to this file, as ``impulse bowling --out`` does. The text equals, byte for
+    write the text to this file, as ``impulse bowling --out`` does, and keep each shard's throws
+    on the way (:func:`shard_path`), so that the same call made again after a kill throws only
+    what was not yet thrown. The text equals, byte for
     byte, the file of the same study run in one process (``impulse.run_bowling_shard(throws,
     seed=seed, **settings)``) or by ``impulse bowling``. Read the pins felled per bin with
     :func:`impulse.bowling_summary`. A failed shard raises its :class:`impulse.ImpulseError`
     here.
     """
     graph = bowling_study_graph(
-        throws, shards, seed=seed, threads_per_shard=threads_per_shard, **settings
+        throws, shards, seed=seed, threads_per_shard=threads_per_shard, out=out, **settings
     )
-    return _compute(graph, client, out)
+    return _compute(graph, client, out, shards)

@@ -134,6 +134,40 @@ pub(super) struct HeldPair {
     cut: bool,
 }
 
+impl HeldPair {
+    /// Each manifold point with its manifold's normal and the impulse it carried over the last
+    /// step ([`HeldPair::span`]; on the pair's second body, world).
+    pub(super) fn points_with_impulses(
+        &self,
+    ) -> impl Iterator<Item = (&ContactPoint, DVec3, DVec3)> + '_ {
+        self.manifolds
+            .iter()
+            .zip(&self.impulses)
+            .flat_map(|(m, imp)| {
+                m.points()
+                    .iter()
+                    .zip(imp)
+                    .map(move |(p, j)| (p, m.normal, *j))
+            })
+    }
+
+    /// Length of the step the impulses were solved for (s); 0 before the first.
+    pub(super) fn span(&self) -> f64 {
+        self.span
+    }
+}
+
+/// Where a held contact's impulse acts, given whether each body of the pair takes impulses:
+/// against a fixed or scripted body, at the moving body's surface (its lever arm exact,
+/// whatever the gap); between two moving bodies, midway.
+pub(super) fn acting_point(point: &ContactPoint, moving: (bool, bool)) -> DVec3 {
+    match moving {
+        (true, false) => point.point_a,
+        (false, true) => point.point_b,
+        _ => point.midpoint(),
+    }
+}
+
 /// What planning an island step counted ([`World::plan_island`]), added to the world's
 /// [`super::Counters`] in island order.
 #[derive(Clone, Copy, Debug, Default)]
@@ -806,14 +840,7 @@ impl World {
                     lone += 1;
                     usize::MAX - lone
                 };
-                // Against a fixed or scripted body the contact acts at the moving body's
-                // surface (its lever arm exact, whatever the gap); between two moving
-                // bodies, midway.
-                let at = match (dyn_a, dyn_b) {
-                    (true, false) => point.point_a,
-                    (false, true) => point.point_b,
-                    _ => point.midpoint(),
-                };
+                let at = acting_point(point, (dyn_a, dyn_b));
                 // The manifold's normal points from a to b: body 1 is b, body 2 is a.
                 contacts.push(Contact {
                     body1: kb,

@@ -920,3 +920,72 @@ fn a_rounded_transition_keeps_the_rolling_speed_and_its_drift_bound() {
     }
     eprintln!("position off the closed form (located, rounded): {worst:?}");
 }
+
+/// A held contact's impulses carry the weight they hold: static equilibrium within this
+/// fraction of the weight times the step (the solver stops at its speed tolerance, and the
+/// stabilisation's pull on a drifted gap adds a little).
+const STATIC_REL: f64 = 1e-4;
+
+/// Two blocks standing on a floor, at rest after 1 s ([`World::held_contacts`]): each held
+/// pair's impulses over its last island step sum to the weight above it times the step (the
+/// upper block's m g, both blocks' 2 m g on the floor), pushing the pair's second (upper) body
+/// up along the normal from the first toward it; their moments about the upper body's centre
+/// of mass cancel (no turning); and the points are the four corners of that body's bottom
+/// face, within ε_c.
+#[test]
+fn held_contacts_carry_the_weight_at_the_corners() {
+    let desc = stack(2, 0.0, 1);
+    let eps = desc.collision_epsilon;
+    let mut world = world_of(desc);
+    world.step_until(1.0).expect("runs");
+    let g = world.gravity().length();
+    let contacts = world.held_contacts();
+    let pairs = world.held_pairs();
+    assert_eq!(pairs.len(), 2, "floor–block0 and block0–block1 held");
+    for (k, pair) in pairs.iter().enumerate() {
+        let points: Vec<_> = contacts.iter().filter(|c| c.bodies == *pair).collect();
+        assert_eq!(
+            points.len(),
+            4,
+            "pair {k}: a face on a face holds four corners"
+        );
+        let upper = world.state(pair.1).expect("live");
+        let m = world
+            .body(pair.1)
+            .expect("live")
+            .mass
+            .expect("dynamic")
+            .mass;
+        let span = points[0].span;
+        assert!(span > 0.0 && points.iter().all(|c| c.span == span));
+        let weight = (2 - k) as f64 * m * g * span;
+        let total: DVec3 = points.iter().map(|c| c.impulse).sum();
+        assert!(
+            (total - weight * DVec3::Z).length() <= STATIC_REL * weight,
+            "pair {k}: impulse {total} against the weight's {weight} over {span} s"
+        );
+        let moment: DVec3 = points
+            .iter()
+            .map(|c| (c.point - upper.com).cross(c.impulse))
+            .sum();
+        let h = 0.05; // the blocks' half extent (`stack`)
+        assert!(
+            moment.length() <= STATIC_REL * weight * h,
+            "pair {k}: moment {moment}"
+        );
+        for c in &points {
+            // Up, within the tilt that keeps a block's corners within ε_c of level.
+            assert!(
+                (c.normal - DVec3::Z).length() <= eps / (2.0 * h),
+                "normal {}",
+                c.normal
+            );
+            let local = c.point - upper.com;
+            let corner = DVec3::new(h * local.x.signum(), h * local.y.signum(), -h);
+            assert!(
+                (local - corner).length() <= eps,
+                "pair {k}: point {local} (body frame) is no bottom corner"
+            );
+        }
+    }
+}

@@ -297,6 +297,25 @@ pub struct StepReport {
     pub checked_penetration: Option<f64>,
 }
 
+/// One point of a pair the switching model holds ([`World::held_contacts`]), as the last
+/// island step that solved the pair used it (thesis §5.3's contact forces, here impulses over
+/// a step of sustained contact).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldContact {
+    /// The pair's bodies, in [`World::held_pairs`]' order.
+    pub bodies: (BodyHandle, BodyHandle),
+    /// Where the impulse acted (world, at the start of that step): on the moving body's
+    /// surface against a fixed or scripted body, else midway between the two surfaces.
+    pub point: DVec3,
+    /// Unit contact normal (world), from the first body toward the second.
+    pub normal: DVec3,
+    /// The impulse on the second body over that step (world; the first receives its
+    /// negative): divided by [`HeldContact::span`], the point's mean force over the step.
+    pub impulse: DVec3,
+    /// Length of that step (s); 0 for a pair held but not stepped yet (its impulses are 0).
+    pub span: f64,
+}
+
 /// The state of one body at one time, as a program sees it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BodyState {
@@ -757,6 +776,34 @@ impl World {
             .into_iter()
             .map(|(a, b)| (self.handle_of(a), self.handle_of(b)))
             .collect()
+    }
+
+    /// Every point of the pairs the switching model holds ([`World::held_pairs`], in that
+    /// order; each pair's points in its manifolds' order) with the impulse the last island step
+    /// gave it. Read-only: the island's own record, the warm start of its next step. Empty in
+    /// the impulse model. The vertices of a fast-turning pair solved outside its manifolds
+    /// keep no impulse and are not listed.
+    #[must_use]
+    pub fn held_contacts(&self) -> Vec<HeldContact> {
+        let mut pairs: Vec<(u32, u32)> = self.islands.held.keys().copied().collect();
+        pairs.sort_unstable();
+        let mut out = Vec::new();
+        for p in pairs {
+            let held = &self.islands.held[&p];
+            let moving = (self.b(p.0).takes_impulses(), self.b(p.1).takes_impulses());
+            let bodies = (self.handle_of(p.0), self.handle_of(p.1));
+            out.extend(
+                held.points_with_impulses()
+                    .map(|(point, normal, impulse)| HeldContact {
+                        bodies,
+                        point: island::acting_point(point, moving),
+                        normal,
+                        impulse,
+                        span: held.span(),
+                    }),
+            );
+        }
+        out
     }
 
     /// Event counters so far.
