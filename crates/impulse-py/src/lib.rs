@@ -119,6 +119,15 @@ pub(crate) fn rows_to_array<'py, const K: usize>(
         .into_pyarray(py)
 }
 
+/// One vector of each item, `f(item)`, as an (n, 3) array.
+pub(crate) fn vector_rows<'py, T>(
+    py: Python<'py>,
+    items: &[T],
+    f: impl Fn(&T) -> DVec3,
+) -> Bound<'py, PyArray2<f64>> {
+    rows_to_array(py, items.iter().map(|x| f(x).to_array()))
+}
+
 /// A 3×3 matrix as a (3, 3) array, row by row.
 pub(crate) fn mat3_rows(py: Python<'_>, rows: [DVec3; 3]) -> Bound<'_, PyArray2<f64>> {
     rows_to_array(py, rows.into_iter().map(|v| v.to_array()))

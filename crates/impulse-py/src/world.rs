@@ -22,7 +22,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{Matrix, Vector, error, finite_vector, rows_to_array, vec3};
+use crate::{Matrix, Vector, error, finite_vector, rows_to_array, vec3, vector_rows};
 
 /// A 1-D float64 array returned to Python.
 type Array1<'py> = Bound<'py, PyArray1<f64>>;
@@ -411,16 +411,7 @@ fn impacts_dict<'py>(
     let d = PyDict::new(py);
     let scalars =
         |f: fn(&ContactEvent) -> f64| PyArray1::from_vec(py, events.iter().map(f).collect());
-    let vectors = |f: fn(&ContactEvent) -> DVec3| {
-        rows_to_array(
-            py,
-            events
-                .iter()
-                .map(|e| f(e).to_array())
-                .collect::<Vec<_>>()
-                .into_iter(),
-        )
-    };
+    let vectors = |f: fn(&ContactEvent) -> DVec3| vector_rows(py, events, f);
     d.set_item("time", scalars(|e| e.time))?;
     d.set_item("a", PyArray1::from_vec(py, a))?;
     d.set_item("b", PyArray1::from_vec(py, b))?;
@@ -868,16 +859,7 @@ impl PyWorld {
             (contacts, a, b)
         })?;
         let d = PyDict::new(py);
-        let vectors = |f: fn(&HeldContact) -> DVec3| {
-            rows_to_array(
-                py,
-                contacts
-                    .iter()
-                    .map(|c| f(c).to_array())
-                    .collect::<Vec<_>>()
-                    .into_iter(),
-            )
-        };
+        let vectors = |f: fn(&HeldContact) -> DVec3| vector_rows(py, &contacts, f);
         d.set_item("a", PyArray1::from_vec(py, a))?;
         d.set_item("b", PyArray1::from_vec(py, b))?;
         d.set_item("point", vectors(|c| c.point))?;

@@ -169,7 +169,7 @@ impl World {
             )
         } else if ba.is_link() || bb.is_link() {
             // A compound pair with a link: the triple pendulum's links against the 49-piece
-            // dish, 1.20 M closest-feature checks in 6 s, 40 k with this (0.74× its wall time).
+            // dish, 1.20 M closest-feature checks in 6 s, 40 k with this (0.72× its wall time).
             // Two rigid bodies' compound pairs keep their queries: bounded so, the feeder
             // chute's caps meet in other places and two of them jam in its funnel (14 of 40
             // perturbed copies jammed against 9; the chute's check is a lottery, see
@@ -189,8 +189,8 @@ impl World {
     /// since ([`LastQuery::moved`]; `shift` ≤ 0): each piece pair found apart by d along n is
     /// separated by a slab of d + shift along n, and bounded along n from it as the query
     /// bounded it from d, with the same pieces' reaches. `None` — query — when the query
-    /// examined a piece pair without a normal or pruned one (a pruned piece pair's bound
-    /// would need the bodies' direction-free coefficients, which a link has not).
+    /// examined a piece pair without a normal, or pruned one (the query prunes none of a
+    /// pair with a link: [`impulse_collide::schedule::free_coefficients`] has none for it).
     fn compound_cached_tau(
         &self,
         (a, b): (u32, u32),
