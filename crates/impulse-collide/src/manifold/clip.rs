@@ -22,6 +22,12 @@ pub(crate) struct Support {
     pub vertex: u32,
 }
 
+/// The merging distance used in clipping against a reference face is at most this fraction
+/// of the face's width across (the least distance from its vertices' centroid to an edge's
+/// line, seen along the normal): a sliver's face 2.5 cm wide under a tolerance of 1.8 m would
+/// otherwise have its corners snapped together. Default `0.1`.
+pub const SNAP_WIDTH_FRACTION: f64 = 0.1;
+
 /// Where a hill climb for the supporting vertex starts: a vertex of the warm feature.
 fn start_vertex(poly: &ConvexPolyhedron, warm: Feature) -> u32 {
     if !warm.is_valid_for(poly) {
@@ -72,7 +78,8 @@ pub(crate) fn support_feature(
             let f = if ed.tail == v { ed.left } else { ed.right };
             let c = poly.face_plane(f).normal.dot(dir);
             let better = face.is_none_or(|(bc, bf)| c > bc || (c == bc && f < bf));
-            if c >= FACE_MIN_COS && better && poly.face_vertices(f).iter().all(|&w| near(w)) {
+            let verts = poly.face_vertices(f);
+            if c >= FACE_MIN_COS && better && verts.contains(&s) && verts.iter().all(|&w| near(w)) {
                 face = Some((c, f));
             }
             if ed.tail != v || face.is_some() {
@@ -80,7 +87,7 @@ pub(crate) fn support_feature(
             }
             let low = height(ed.tail).min(height(ed.head));
             let better = edge.is_none_or(|(bl, be)| low > bl || (low == bl && e < be));
-            if better && near(ed.head) {
+            if better && near(ed.head) && (ed.tail == s || ed.head == s) {
                 edge = Some((low, e));
             }
         }
@@ -259,14 +266,21 @@ impl Pair<'_> {
                 })
             })
             .collect();
+        // A face thinner across than the merging distance (a sliver's, where the tolerance is
+        // a fraction of its length) would have its corners snapped onto the planes of its
+        // opposite edges: the snap is kept below a fraction of its width across.
+        let centroid = (0..loop_.len()).map(at).sum::<DVec3>() / loop_.len() as f64;
+        let width = planes
+            .iter()
+            .map(|s| -s.normal.dot(centroid - s.origin))
+            .fold(f64::INFINITY, f64::min);
+        let snap = self.snap.min(SNAP_WIDTH_FRACTION * width.max(0.0));
         let inc_vertex = |v: u32| inc_pose.transform_point(inc_poly.vertex(v));
         let reference = Feature::Face(f);
         let clipped: Vec<(DVec3, Feature, Feature)> = match other {
             Feature::Vertex(v) => {
                 let p = inc_vertex(v);
-                let inside = planes
-                    .iter()
-                    .all(|s| s.normal.dot(p - s.origin) <= self.snap);
+                let inside = planes.iter().all(|s| s.normal.dot(p - s.origin) <= snap);
                 if inside {
                     vec![(p, reference, other)]
                 } else {
@@ -279,7 +293,7 @@ impl Pair<'_> {
                     (inc_vertex(ed.tail), reference, Feature::Vertex(ed.tail)),
                     (inc_vertex(ed.head), reference, Feature::Vertex(ed.head)),
                 ];
-                clip_segment(ends, e, &planes, self.snap)
+                clip_segment(ends, e, &planes, snap)
             }
             Feature::Face(g) => {
                 let corners: Vec<Corner> = inc_poly
@@ -293,7 +307,7 @@ impl Pair<'_> {
                         next: On::Incident(e),
                     })
                     .collect();
-                clip_polygon(corners, ref_poly, g, &planes, self.snap)
+                clip_polygon(corners, ref_poly, g, &planes, snap)
             }
         };
         // Onto the reference plane along n_ref: p + s·n_ref with (p + s·n_ref − o)·m = 0; the

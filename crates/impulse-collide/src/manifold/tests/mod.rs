@@ -14,6 +14,7 @@ use rand::RngExt;
 mod boxes;
 mod outside;
 mod random;
+mod slivers;
 mod smooth;
 
 /// The contact tolerance of these tests (m; ε_c for bodies of 5–20 cm, thesis §2.2).
