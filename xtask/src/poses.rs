@@ -18,8 +18,8 @@ pub const CASE: &str = "poses";
 /// Drops per study (the thesis's count per part).
 const DROPS: u64 = 2000;
 
-/// The speed part: an irregular pebble, 60 hull facets (the "50-facet part"; the
-/// 50-facet coin rolls on its edge for seconds, see [`COIN_MAX_TIME`]).
+/// The speed part: an irregular pebble, 60 hull facets (a part of about 50 facets, as the
+/// speed study asks; the 50-facet coin rolls on its edge for seconds, see [`COIN_MAX_TIME`]).
 const SPEED_PART: &str = "pebble.ron";
 
 /// The coin.

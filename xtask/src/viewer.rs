@@ -44,7 +44,8 @@ use crate::{Result, cargo, workspace_root};
 
 /// How the step builds the `impulse` program it runs.
 const BUILD: [&str; 4] = ["test", "--workspace", "--no-run", "--quiet"];
-/// Bodies of the generated playback scene (the "30 s, 50-body run").
+/// Bodies of the generated playback scene (a 30 s, 50-body run: the page's
+/// frame-rate check at a size a user meets).
 pub const FIFTY: usize = 50;
 /// Simulated length of the generated playback scene (s).
 pub const FIFTY_SECONDS: f64 = 30.0;

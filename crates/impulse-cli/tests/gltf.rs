@@ -7,8 +7,8 @@ use common::Scratch;
 use common::impulse_text as impulse;
 use std::path::{Path, PathBuf};
 
-/// How far a keyframe may be from the recorded state (the acceptance: glTF stores f32,
-/// whose rounding of these scenes' coordinates is below 1e-7).
+/// How far a keyframe may be from the recorded state (glTF stores f32, whose
+/// rounding of these scenes' coordinates is below 1e-7).
 const KEYFRAME_TOL: f64 = 1e-6;
 
 fn scenes() -> PathBuf {

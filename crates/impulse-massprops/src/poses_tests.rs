@@ -158,7 +158,7 @@ fn inside_by_areas(corners: &[DVec3], p: DVec3) -> bool {
 }
 
 /// On 1000 random hulls with random centres of mass: the stable set agrees with the
-/// brute-force projection test (the V23 clause), the solid angles agree with the
+/// brute-force projection test (validation V23's clause), the solid angles agree with the
 /// spherical excess of their corner angles and cover the sphere (sum 1), each tip lowers the centre of
 /// mass and ends on a stable facet, and the quasi-static shares sum to 1.
 #[test]

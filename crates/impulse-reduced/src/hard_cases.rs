@@ -656,8 +656,8 @@ pub fn plain_newton(m: &Mechanism, loads: &[Load], tolerance: f64) -> Option<Con
 
 /// The loads of a case's nonlinear check: a force along a random direction on every end
 /// effector, of the magnitudes that turn the most compliant joint by about 0.01, 0.1, 0.5
-/// and 1.5 rad over the bounding radius (`θ / (c_max r)`); for ladders the 1, 10,
-/// 100 and 1000 N.
+/// and 1.5 rad over the bounding radius (`θ / (c_max r)`); for ladders 1, 10, 100 and
+/// 1000 N (four decades of load).
 #[must_use]
 pub fn case_loads(m: &Mechanism, family: Family, rng: &mut SplitMix) -> Vec<Vec<Load>> {
     let dirs: Vec<DVec3> = m.end_effectors.iter().map(|_| rng.direction()).collect();

@@ -268,7 +268,7 @@ pub fn rolling_onset(
 }
 
 /// Stacks: the top block's horizontal drift and the largest penetration between any two boxes
-/// over the run, both in units of the scene's ε_c (the acceptance: both ≤ ε_c; the
+/// over the run, both in units of the scene's ε_c (the stack bench asks both ≤ ε_c; the
 /// error is the larger of the two), and whether the stack still stands at the end (top block within [`STANDS_DRIFT_REL`] of its
 /// half width sideways and [`STANDS_DROP_REL`] of its half height down).
 ///
