@@ -226,23 +226,22 @@ fn call_load(
     state: &BodyState,
 ) -> PyResult<Load> {
     let s = PyDict::new(py);
-    s.set_item(
-        "position",
-        PyArray1::from_slice(py, &state.position.to_array()),
-    )?;
-    s.set_item(
-        "rotation",
-        PyArray1::from_slice(py, &state.rotation.to_array()),
-    )?;
-    s.set_item(
-        "velocity",
-        PyArray1::from_slice(py, &state.velocity.to_array()),
-    )?;
-    s.set_item(
-        "angular_velocity",
-        PyArray1::from_slice(py, &state.omega.to_array()),
-    )?;
-    s.set_item("com", PyArray1::from_slice(py, &state.com.to_array()))?;
+    let (position, rotation) = (state.position.to_array(), state.rotation.to_array());
+    let (velocity, omega, com) = (
+        state.velocity.to_array(),
+        state.omega.to_array(),
+        state.com.to_array(),
+    );
+    let fields: [(&str, &[f64]); 5] = [
+        ("position", &position),
+        ("rotation", &rotation),
+        ("velocity", &velocity),
+        ("angular_velocity", &omega),
+        ("com", &com),
+    ];
+    for (key, value) in fields {
+        s.set_item(key, PyArray1::from_slice(py, value))?;
+    }
     let value = function.bind(py).call1((t, s))?;
     let what = format!("the load function of body \"{body}\"");
     let bad = || {

@@ -126,7 +126,9 @@ impl World {
             state.features = vec![FeaturePair::default(); na * nb];
             state.normals = vec![None; na * nb];
         }
-        let compound = na * nb > 1;
+        // What each piece pair was found at, for a compound pair that a cached bound may key
+        // (one with a link: `quick_bounds.rs`).
+        let compound = na * nb > 1 && (ba.is_link() || bb.is_link());
         if compound {
             state.gaps.clear();
             state.gaps.resize(na * nb, SlotGap::Skipped);
